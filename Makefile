@@ -1,0 +1,32 @@
+# The README's commands. Each one installs missing system packages, configures and builds first.
+PRESET ?= release
+BUILD_DIR := build/$(PRESET)
+BIN := $(BUILD_DIR)/bin
+CONFIG ?= configs/default.json
+JOBS ?= $(shell nproc)
+
+.PHONY: deps configure build test bench figures format clean
+
+deps:
+	@tools/install-deps.sh
+
+configure: deps
+	@cmake --preset $(PRESET)
+
+build: configure
+	@cmake --build --preset $(PRESET) -j $(JOBS)
+
+test: build
+	@ctest --preset $(PRESET)
+
+bench: build
+	@$(BIN)/canopy-bench --config $(CONFIG)
+
+figures: deps
+	@python3 paper_figures/make_figures.py results
+
+format:
+	@find common methods bench viewer tests -name '*.cpp' -o -name '*.h' | xargs clang-format -i
+
+clean:
+	@rm -rf build

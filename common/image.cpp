@@ -1,0 +1,125 @@
+#include "common/image.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <fstream>
+#include <stdexcept>
+
+#include "common/atomic_file.h"
+#include "common/error.h"
+
+namespace canopy {
+
+ImageRgba8 readImage(const std::filesystem::path& path) {
+  if (!std::filesystem::exists(path)) {
+    throwInputError("{}: image file does not exist", path.string());
+  }
+  auto input = OIIO::ImageInput::open(path.string());
+  if (!input) {
+    throwInputError("{}: not a readable image ({})", path.string(), OIIO::geterror());
+  }
+  const OIIO::ImageSpec& spec = input->spec();
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth != 1) {
+    throwInputError("{}: unsupported image layout ({}x{}, {} channels)", path.string(), spec.width,
+                    spec.height, spec.nchannels);
+  }
+  const int channels = spec.nchannels;
+  std::vector<uint8_t> raw(size_t(spec.width) * spec.height * channels);
+  if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, raw.data())) {
+    throwInputError("{}: truncated or corrupt image ({})", path.string(), input->geterror());
+  }
+  ImageRgba8 image(spec.width, spec.height);
+  const int alphaChannel = spec.alpha_channel >= 0 ? spec.alpha_channel : (channels == 4 ? 3 : -1);
+  for (size_t i = 0; i < size_t(spec.width) * spec.height; ++i) {
+    const uint8_t* src = &raw[i * channels];
+    uint8_t* dst = &image.pixels[i * 4];
+    if (channels >= 3) {
+      dst[0] = src[0];
+      dst[1] = src[1];
+      dst[2] = src[2];
+    } else {
+      dst[0] = dst[1] = dst[2] = src[0];
+    }
+    if (alphaChannel >= 0) {
+      dst[3] = src[alphaChannel];
+    } else if (channels == 2) {
+      dst[3] = src[1];
+    } else {
+      dst[3] = 255;
+    }
+  }
+  return image;
+}
+
+void writePng(const std::filesystem::path& path, const ImageRgba8& image) {
+  assert(!image.empty());
+  writeFileAtomically(path, [&](const std::filesystem::path& temporary) {
+    auto output = OIIO::ImageOutput::create("png");
+    if (!output) throw std::runtime_error("OpenImageIO has no PNG writer");
+    OIIO::ImageSpec spec(image.width, image.height, 4, OIIO::TypeDesc::UINT8);
+    spec.attribute("oiio:ColorSpace", "sRGB");
+    if (!output->open(temporary.string(), spec) ||
+        !output->write_image(OIIO::TypeDesc::UINT8, image.pixels.data()) || !output->close()) {
+      throw std::runtime_error(path.string() + ": cannot write PNG: " + output->geterror());
+    }
+  });
+}
+
+ImageRgbaF boxDownsample(const ImageRgbaF& image, int factor) {
+  assert(factor >= 1 && image.width % factor == 0 && image.height % factor == 0);
+  if (factor == 1) return image;
+  ImageRgbaF result(image.width / factor, image.height / factor);
+  const float weight = 1.0f / float(factor * factor);
+  for (int y = 0; y < result.height; ++y) {
+    for (int x = 0; x < result.width; ++x) {
+      float sum[4] = {0, 0, 0, 0};
+      for (int sy = 0; sy < factor; ++sy) {
+        for (int sx = 0; sx < factor; ++sx) {
+          const float* p = image.at(x * factor + sx, y * factor + sy);
+          for (int c = 0; c < 4; ++c) sum[c] += p[c];
+        }
+      }
+      float* out = result.at(x, y);
+      for (int c = 0; c < 4; ++c) out[c] = sum[c] * weight;
+    }
+  }
+  return result;
+}
+
+float srgbToLinear(float value) {
+  return value <= 0.04045f ? value / 12.92f : std::pow((value + 0.055f) / 1.055f, 2.4f);
+}
+
+float linearToSrgb(float value) {
+  value = std::clamp(value, 0.0f, 1.0f);
+  return value <= 0.0031308f ? value * 12.92f : 1.055f * std::pow(value, 1.0f / 2.4f) - 0.055f;
+}
+
+uint8_t encodeSrgb8(float linear) {
+  return static_cast<uint8_t>(std::lround(linearToSrgb(linear) * 255.0f));
+}
+
+ImageRgba8 compositeToSrgb8(const ImageRgbaF& image, glm::vec3 backgroundLinear) {
+  ImageRgba8 result(image.width, image.height);
+  for (size_t i = 0; i < size_t(image.width) * image.height; ++i) {
+    const float* p = &image.pixels[i * 4];
+    const float alpha = std::clamp(p[3], 0.0f, 1.0f);
+    uint8_t* out = &result.pixels[i * 4];
+    for (int c = 0; c < 3; ++c) out[c] = encodeSrgb8(p[c] + (1.0f - alpha) * backgroundLinear[c]);
+    out[3] = static_cast<uint8_t>(std::lround(alpha * 255.0f));
+  }
+  return result;
+}
+
+void flipRows(ImageRgbaF& image) {
+  const size_t rowFloats = size_t(image.width) * 4;
+  for (int y = 0; y < image.height / 2; ++y) {
+    std::swap_ranges(image.pixels.begin() + y * rowFloats, image.pixels.begin() + (y + 1) * rowFloats,
+                     image.pixels.begin() + (image.height - 1 - y) * rowFloats);
+  }
+}
+
+}  // namespace canopy
