@@ -1,1 +1,261 @@
-// placeholder
+#include "bench/runner.h"
+
+#include <chrono>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <regex>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "bench/harness.h"
+#include "bench/report.h"
+#include "bench/results_store.h"
+#include "common/atomic_file.h"
+#include "common/image.h"
+#include "common/metrics.h"
+#include "common/progress.h"
+#include "common/system_info.h"
+
+namespace canopy {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+std::string safeName(const std::string& label) {
+  return std::regex_replace(label, std::regex("[^A-Za-z0-9_.=,-]"), "_");
+}
+
+std::string viewKey(const ViewPose& pose) {
+  return fmt::format("d{:g}_e{:g}_a{:g}", pose.distance, pose.elevation, pose.azimuth);
+}
+
+struct BakedMethod {
+  std::unique_ptr<Method> method;
+  nlohmann::json record;  // the kind:"bake" record
+};
+
+// Bakes and uploads one method under its own ledger owner and measures what the record needs.
+BakedMethod bakeMethod(const MethodVariant& variant, const Tree& tree, gl::Device& device, uint64_t seed,
+                       const std::filesystem::path& assetFolder, bool saveAsset) {
+  BakedMethod baked;
+  baked.method = builtinMethods().find(variant.method).create(variant.params, "methods." + variant.label);
+  const bool peakReset = resetPeakRss();
+  BakeContext context;
+  context.seed = seed;
+  const auto start = Clock::now();
+  baked.method->bake(tree, context);
+  const double bakeSeconds = secondsSince(start);
+  const uint64_t peak = peakRssBytes();
+  {
+    gl::Device::OwnerScope owner(device, variant.label);
+    baked.method->upload(device);
+  }
+  gl::checkError(("upload of " + variant.label).c_str());
+  uint64_t diskBytes = 0;
+  if (saveAsset) {
+    std::filesystem::remove_all(assetFolder);
+    std::filesystem::create_directories(assetFolder);
+    AssetFolder asset(assetFolder);
+    baked.method->save(asset);
+    diskBytes = asset.sizeOnDisk();
+  }
+  baked.record = {{"kind", "bake"},
+                  {"bake_s", bakeSeconds},
+                  {"bake_peak_rss_bytes", peak},
+                  {"bake_peak_rss_scope", peakReset ? "bake" : "process"},
+                  {"memory_bytes", gl::toJson(device.ledger().totals(variant.label))},
+                  {"disk_bytes", saveAsset ? nlohmann::json(diskBytes) : nlohmann::json()},
+                  {"params", baked.method->effectiveParams()}};
+  return baked;
+}
+
+nlohmann::json readPreviousRuns(const std::filesystem::path& metaPath) {
+  if (!std::filesystem::exists(metaPath)) return nlohmann::json::array();
+  try {
+    const nlohmann::json meta = nlohmann::json::parse(std::ifstream(metaPath));
+    return meta.value("runs", nlohmann::json::array());
+  } catch (const std::exception&) {
+    return nlohmann::json::array();
+  }
+}
+
+}  // namespace
+
+std::pair<int, int> parseShard(const std::string& text) {
+  std::smatch match;
+  if (!std::regex_match(text, match, std::regex(R"((\d+)/(\d+))"))) {
+    throwInputError("--shard: '{}' must be I/N (e.g. 0/4)", text);
+  }
+  const int index = std::stoi(match[1]), count = std::stoi(match[2]);
+  if (count < 1 || index >= count) throwInputError("--shard: '{}' needs 0 <= I < N", text);
+  return {index, count};
+}
+
+void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
+  ResultsStore store(options.outDirectory);
+  const auto metaPath = options.outDirectory / "meta.json";
+  auto context = gl::createContext({options.backend});
+  const std::string renderer = context->renderer();
+  nlohmann::json meta = {{"experiment", config.name},
+                         {"config", config.raw},
+                         {"config_hash", config.hash},
+                         {"git_commit", gitCommit()},
+                         {"canopy_version", CANOPY_VERSION},
+                         {"gl", {{"backend", gl::backendName(options.backend)},
+                                 {"renderer", renderer},
+                                 {"version", context->version()},
+                                 {"vendor", context->vendor()}}},
+                         {"cpu", cpuModel()},
+                         {"seed", config.seed},
+                         {"shard", fmt::format("{}/{}", options.shardIndex, options.shardCount)},
+                         {"started", isoTimestampUtc()}};
+  nlohmann::json runs = readPreviousRuns(metaPath);
+  writeTextAtomically(metaPath, nlohmann::json(meta).dump(2));
+  spdlog::info("{}: {} tree(s) × {} method variant(s) on {} ({})", config.name, config.trees.size(),
+               config.variants.size(), renderer, gl::backendName(options.backend));
+
+  gl::Ledger ledger;
+  gl::Device device(ledger);
+  Harness harness(device, config.views.render);
+  const std::vector<ViewPose> poses =
+      makeViewRings(config.views.distances, config.views.elevations, config.views.azimuths);
+  const MethodVariant referenceVariant{"polygonal", nlohmann::json::object(), "polygonal"};
+
+  for (size_t t = 0; t < config.trees.size(); ++t) {
+    const TreeSpec& spec = config.trees[t];
+    std::vector<size_t> mine;
+    for (size_t v = 0; v < config.variants.size(); ++v) {
+      if ((t * config.variants.size() + v) % size_t(options.shardCount) == size_t(options.shardIndex)) mine.push_back(v);
+    }
+    if (mine.empty()) continue;
+    const std::string treeLabel = spec.label();
+    const auto loadStart = Clock::now();
+    const Tree tree = loadTree(spec);
+    const double loadSeconds = secondsSince(loadStart);
+    spdlog::info("tree {}: {} leaves, {} wood triangles, loaded in {:.2f} s", treeLabel, tree.leaves.size(),
+                 tree.wood.triangleCount(), loadSeconds);
+    const std::string treeKey = "tree|" + treeLabel;
+    if (!store.has(treeKey)) {
+      store.append({{"kind", "tree"}, {"tree", treeLabel}, {"source", spec.source()},
+                    {"leaves", tree.leaves.size()}, {"wood_triangles", tree.wood.triangleCount()},
+                    {"branch_nodes", tree.branches.size()}, {"bounding_radius", tree.boundingSphereRadius()},
+                    {"load_s", loadSeconds}},
+                   treeKey);
+    }
+    const auto forest = [&](int size) { return layoutForest(size, tree.boundingSphereRadius(), config.seed); };
+
+    // The reference, baked once per tree; its images and forest times are made on first need.
+    std::optional<BakedMethod> reference;
+    std::map<std::string, ImageRgba8> referenceImages;
+    std::map<int, FrameTimes> referenceTimes;
+    const auto ensureReference = [&] {
+      if (!reference) reference = bakeMethod(referenceVariant, tree, device, config.seed, {}, false);
+    };
+    const auto referenceImage = [&](const ViewPose& pose) -> const ImageRgba8& {
+      ensureReference();
+      auto [it, inserted] = referenceImages.try_emplace(viewKey(pose));
+      if (inserted) {
+        it->second = harness.render(*reference->method, orbitCamera(tree.bounds, pose, config.views.render.fovYDegrees));
+        if (options.saveImages) {
+          writePng(options.outDirectory / "images" / safeName(treeLabel) / "reference" / (viewKey(pose) + ".png"),
+                   withOpaqueAlpha(it->second));
+        }
+      }
+      return it->second;
+    };
+    const auto referenceTime = [&](int size) -> const FrameTimes& {
+      ensureReference();
+      auto [it, inserted] = referenceTimes.try_emplace(size);
+      if (inserted) {
+        it->second = harness.timeForest(*reference->method, forest(size), tree.bounds, config.forests.frames,
+                                        config.forests.warmup, config.forests.width, config.forests.height);
+      }
+      return it->second;
+    };
+
+    for (size_t v : mine) {
+      const MethodVariant& variant = config.variants[v];
+      const std::string prefix = treeLabel + "|" + variant.label + "|";
+      std::vector<ViewPose> pendingViews;
+      for (const ViewPose& pose : poses) if (!store.has(prefix + "view|" + viewKey(pose))) pendingViews.push_back(pose);
+      std::vector<int> pendingForests;
+      for (int size : config.forests.sizes) if (!store.has(prefix + fmt::format("forest|{}", size))) pendingForests.push_back(size);
+      const bool bakeDone = store.has(prefix + "bake");
+      if (bakeDone && pendingViews.empty() && pendingForests.empty()) {
+        spdlog::info("{} on {}: already complete, skipped", variant.label, treeLabel);
+        continue;
+      }
+      const nlohmann::json common = {{"tree", treeLabel}, {"method", variant.method}, {"variant", variant.label}};
+      spdlog::info("{} on {}: baking", variant.label, treeLabel);
+      BakedMethod baked = bakeMethod(variant, tree, device, config.seed,
+                                     options.outDirectory / "assets" / safeName(treeLabel) / safeName(variant.label),
+                                     options.saveAssets);
+      const nlohmann::json params = baked.record["params"];
+      spdlog::info("{} on {}: bake {:.2f} s, {:.2f} MB on the GPU", variant.label, treeLabel,
+                   baked.record["bake_s"].get<double>(), baked.record["memory_bytes"]["total"].get<double>() / 1e6);
+      if (!bakeDone) {
+        nlohmann::json record = common;
+        record.update(baked.record);
+        record["gl_renderer"] = renderer;
+        store.append(record, prefix + "bake");
+      }
+      {
+        ProgressBar progress(fmt::format("{} {} views", treeLabel, variant.label), pendingViews.size());
+        for (const ViewPose& pose : pendingViews) {
+          const ImageRgba8& expected = referenceImage(pose);
+          const ImageRgba8 image = harness.render(*baked.method, orbitCamera(tree.bounds, pose, config.views.render.fovYDegrees));
+          const ImageMetrics metrics = compareImages(expected, image);
+          if (options.saveImages) {
+            writePng(options.outDirectory / "images" / safeName(treeLabel) / safeName(variant.label) / (viewKey(pose) + ".png"),
+                     withOpaqueAlpha(image));
+          }
+          nlohmann::json record = common;
+          record.update({{"kind", "view"}, {"params", params}, {"distance", pose.distance},
+                         {"elevation", pose.elevation}, {"azimuth", pose.azimuth}, {"psnr", metrics.psnr},
+                         {"psnr_frame", metrics.psnrFrame}, {"ssim", metrics.ssim},
+                         {"coverage_error", metrics.coverageError}, {"union_pixels", metrics.unionPixels},
+                         {"shading", config.views.render.shading == Shading::kLit ? "lit" : "unlit"}});
+          store.append(record, prefix + "view|" + viewKey(pose));
+          progress.advance();
+        }
+      }
+      {
+        ProgressBar progress(fmt::format("{} {} forests", treeLabel, variant.label), pendingForests.size());
+        for (int size : pendingForests) {
+          // Reference first, then the method, back to back in this process: the ratio is from one run.
+          const bool isReference = variant.method == "polygonal" && variant.params.empty();
+          const FrameTimes& polygonal = referenceTime(size);
+          const FrameTimes times = isReference ? polygonal
+                                               : harness.timeForest(*baked.method, forest(size), tree.bounds,
+                                                                    config.forests.frames, config.forests.warmup,
+                                                                    config.forests.width, config.forests.height);
+          nlohmann::json record = common;
+          record.update({{"kind", "forest"}, {"params", params}, {"trees", size},
+                         {"frames", times.frames}, {"warmup", config.forests.warmup},
+                         {"resolution", {config.forests.width, config.forests.height}},
+                         {"frame_ms_median", times.medianMs}, {"frame_ms_p95", times.p95Ms},
+                         {"frame_ms_mean", times.meanMs}, {"fps", 1000.0 / times.medianMs},
+                         {"polygonal_frame_ms_median", polygonal.medianMs},
+                         {"speedup_vs_polygonal", polygonal.medianMs / times.medianMs},
+                         {"gl_renderer", renderer}});
+          store.append(record, prefix + fmt::format("forest|{}", size));
+          progress.advance();
+        }
+      }
+    }
+  }
+  writeSummaries(options.outDirectory, store.records(), config.name, renderer);
+  meta["finished"] = isoTimestampUtc();
+  runs.push_back({{"started", meta["started"]}, {"finished", meta["finished"]}, {"git_commit", meta["git_commit"]},
+                  {"gl_renderer", renderer}, {"shard", meta["shard"]}});
+  meta["runs"] = runs;
+  writeTextAtomically(metaPath, meta.dump(2));
+  spdlog::info("{}: results in {}", config.name, options.outDirectory.string());
+}
+
+}  // namespace canopy

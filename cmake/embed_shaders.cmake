@@ -1,6 +1,7 @@
 # Writes OUTPUT: a C++ file that embeds the shader files FILES (paths relative to ROOT) as raw
 # string literals, with a lookup by path. Run at build time so edits to a shader rebuild it.
 set(body "")
+string(REPLACE "|" ";" FILES "${FILES}")
 foreach(relative IN LISTS FILES)
   file(READ "${ROOT}/${relative}" text)
   string(FIND "${text}" ")canopy_glsl\"" clash)

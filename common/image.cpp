@@ -1,5 +1,6 @@
 #include "common/image.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -13,23 +14,19 @@
 
 namespace canopy {
 
-ImageRgba8 readImage(const std::filesystem::path& path) {
-  if (!std::filesystem::exists(path)) {
-    throwInputError("{}: image file does not exist", path.string());
-  }
-  auto input = OIIO::ImageInput::open(path.string());
-  if (!input) {
-    throwInputError("{}: not a readable image ({})", path.string(), OIIO::geterror());
-  }
-  const OIIO::ImageSpec& spec = input->spec();
+namespace {
+
+// Decodes the first subimage of an opened input into 8-bit RGBA; `name` appears in errors.
+ImageRgba8 decodeImage(OIIO::ImageInput& input, const std::string& name) {
+  const OIIO::ImageSpec& spec = input.spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth != 1) {
-    throwInputError("{}: unsupported image layout ({}x{}, {} channels)", path.string(), spec.width,
+    throwInputError("{}: unsupported image layout ({}x{}, {} channels)", name, spec.width,
                     spec.height, spec.nchannels);
   }
   const int channels = spec.nchannels;
   std::vector<uint8_t> raw(size_t(spec.width) * spec.height * channels);
-  if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, raw.data())) {
-    throwInputError("{}: truncated or corrupt image ({})", path.string(), input->geterror());
+  if (!input.read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, raw.data())) {
+    throwInputError("{}: truncated or corrupt image ({})", name, input.geterror());
   }
   ImageRgba8 image(spec.width, spec.height);
   const int alphaChannel = spec.alpha_channel >= 0 ? spec.alpha_channel : (channels == 4 ? 3 : -1);
@@ -52,6 +49,27 @@ ImageRgba8 readImage(const std::filesystem::path& path) {
     }
   }
   return image;
+}
+
+}  // namespace
+
+ImageRgba8 readImage(const std::filesystem::path& path) {
+  if (!std::filesystem::is_regular_file(path)) {
+    throwInputError("{}: image file does not exist", path.string());
+  }
+  auto input = OIIO::ImageInput::open(path.string());
+  if (!input) {
+    throwInputError("{}: not a readable image ({})", path.string(), OIIO::geterror());
+  }
+  return decodeImage(*input, path.string());
+}
+
+ImageRgba8 readImageFromMemory(const void* data, size_t size, const std::string& formatHint,
+                               const std::string& name) {
+  OIIO::Filesystem::IOMemReader reader(data, size);
+  auto input = OIIO::ImageInput::open("embedded." + formatHint, nullptr, &reader);
+  if (!input) throwInputError("{}: not a readable image ({})", name, OIIO::geterror());
+  return decodeImage(*input, name);
 }
 
 void writePng(const std::filesystem::path& path, const ImageRgba8& image) {
@@ -112,6 +130,11 @@ ImageRgba8 compositeToSrgb8(const ImageRgbaF& image, glm::vec3 backgroundLinear)
     out[3] = static_cast<uint8_t>(std::lround(alpha * 255.0f));
   }
   return result;
+}
+
+ImageRgba8 withOpaqueAlpha(ImageRgba8 image) {
+  for (size_t i = 3; i < image.pixels.size(); i += 4) image.pixels[i] = 255;
+  return image;
 }
 
 void flipRows(ImageRgbaF& image) {

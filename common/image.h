@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -39,6 +40,10 @@ struct ImageRgbaF {
 // Reads any image OpenImageIO can read into 8-bit RGBA (grey → RGB, no alpha → opaque).
 // Throws InputError naming the file when it is missing or not an image.
 ImageRgba8 readImage(const std::filesystem::path& path);
+// The same for an image held in memory (e.g. embedded in a GLB); `formatHint` is an extension
+// such as "png", `name` what errors call it.
+ImageRgba8 readImageFromMemory(const void* data, size_t size, const std::string& formatHint,
+                               const std::string& name);
 
 // Writes a PNG atomically (temporary file, then rename). Throws std::runtime_error on failure.
 void writePng(const std::filesystem::path& path, const ImageRgba8& image);
@@ -55,6 +60,9 @@ uint8_t encodeSrgb8(float linear);
 // Composites a premultiplied linear image over an opaque background colour (linear) and encodes
 // it to 8-bit sRGB; alpha of the result keeps the coverage (0..255).
 ImageRgba8 compositeToSrgb8(const ImageRgbaF& image, glm::vec3 backgroundLinear);
+
+// A copy with alpha 255 everywhere: what a person sees of a composited image.
+ImageRgba8 withOpaqueAlpha(ImageRgba8 image);
 
 // Flips rows (GL read-back is bottom-up).
 void flipRows(ImageRgbaF& image);

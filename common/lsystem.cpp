@@ -32,13 +32,18 @@ void rewriteApex(const Module& apex, const LSystemTreeParams& params, Random& ra
   const int order = static_cast<int>(apex.p[2]);
   out.push_back(makeModule('F', length, radius, float(order)));
   if (order < params.maxOrder) {
-    const float pitch = params.branchAngle + random.uniform(-1, 1) * params.angleJitter;
-    out.push_back(makeModule('['));
-    out.push_back(makeModule('/', random.uniform(-1, 1) * params.angleJitter));
-    out.push_back(makeModule('&', pitch));
-    out.push_back(makeModule('A', length * params.lateralLengthRatio, radius * params.radiusRatio,
-                             float(order + 1)));
-    out.push_back(makeModule(']'));
+    // Order-0 axes bear `trunkLaterals` laterals per internode, spread around; others bear one.
+    const int laterals = order == 0 ? params.trunkLaterals : 1;
+    for (int i = 0; i < laterals; ++i) {
+      const float pitch = params.branchAngle + random.uniform(-1, 1) * params.angleJitter;
+      out.push_back(makeModule('['));
+      out.push_back(makeModule('/', 360.0f * float(i) / float(laterals) +
+                                        random.uniform(-1, 1) * params.angleJitter));
+      out.push_back(makeModule('&', pitch));
+      out.push_back(makeModule('A', length * params.lateralLengthRatio, radius * params.radiusRatio,
+                               float(order + 1)));
+      out.push_back(makeModule(']'));
+    }
   }
   out.push_back(makeModule('/', params.divergence + random.uniform(-1, 1) * params.angleJitter));
   // A small random turn keeps axes from being perfectly straight.
@@ -148,8 +153,10 @@ void addCylinder(WoodMesh& wood, const Turtle& turtle, float length, float radiu
 Leaf makeLeaf(const Turtle& turtle, const Module& m, const LSystemTreeParams& params,
               Random& random) {
   const float scale = m.p[0], pitch = m.p[1] * kDegToRad, roll = m.p[2] * kDegToRad;
-  const glm::vec3 base = turtle.position - turtle.heading * m.p[3];
   const glm::vec3 side = turtle.left * std::cos(roll) + turtle.up * std::sin(roll);
+  // Leaves stand off the twig on petioles and short spurs, so foliage fills the crown volume.
+  const glm::vec3 base =
+      turtle.position - turtle.heading * m.p[3] + side * (params.leafSpread * random.uniform());
   const glm::vec3 direction = glm::normalize(turtle.heading * std::cos(pitch) + side * std::sin(pitch));
   // The blade's width axis: horizontal where possible, twisted randomly by up to ±35°.
   glm::vec3 across = glm::cross(direction, glm::vec3(0.0f, 1.0f, 0.0f));
@@ -197,11 +204,18 @@ LSystemTreeParams treePreset(const std::string& name) {
   params.preset = name;
   if (name == "broadleaf") {
     // Defaults: a single-trunk deciduous tree of about 11 m like the papers' oak and chestnut.
-    params.iterations = 9;
-    params.maxOrder = 5;
+    params.iterations = 8;
+    params.maxOrder = 4;
+    params.boleLength = 2.2f;
+    params.trunkLength = 1.1f;
+    params.mainLengthRatio = 0.86f;
+    params.lateralLengthRatio = 0.92f;
+    params.branchAngle = 52.0f;
+    params.tropism = 0.02f;
+    params.leafOrder = 2;
     params.leaves = 20000;
   } else if (name == "shrub") {
-    params.iterations = 6;
+    params.iterations = 5;
     params.maxOrder = 4;
     params.stems = 5;
     params.stemSpread = 28.0f;
@@ -212,8 +226,9 @@ LSystemTreeParams treePreset(const std::string& name) {
     params.tropism = 0.03f;
     params.leafOrder = 1;
     params.leaves = 2500;
-    params.leafLength = 0.09f;
-    params.leafWidth = 0.05f;
+    params.leafLength = 0.13f;
+    params.leafWidth = 0.075f;
+    params.leafSpread = 0.12f;
   } else if (name == "sparse") {
     params.iterations = 7;
     params.maxOrder = 3;

@@ -43,6 +43,8 @@ struct LSystemTreeParams {
   float leafWidth = 0.09f;       // blade width (m)
   float leafSizeJitter = 0.2f;   // relative size variation
   float leafPitch = 50.0f;       // angle of the leaf axis from the twig (deg)
+  float leafSpread = 0.25f;      // leaves stand up to this far off their twig (m)
+  int trunkLaterals = 2;         // laterals per internode on order-0 axes
   int leafTextureVariants = 2;   // procedurally drawn leaf textures to choose from
   int leafTextureSize = 256;     // texels per side of each leaf image
 };

@@ -1,0 +1,204 @@
+#include "bench/experiment.h"
+
+#include <filesystem>
+#include <regex>
+#include <set>
+
+#include <fmt/format.h>
+
+#include "common/config.h"
+#include "methods/method.h"
+
+namespace canopy {
+
+std::vector<nlohmann::json> expandSweep(const nlohmann::json& params) {
+  std::vector<nlohmann::json> points{nlohmann::json::object()};
+  for (const auto& [key, value] : params.items()) {
+    std::vector<nlohmann::json> next;
+    const bool sweep = value.is_array();
+    if (sweep && value.empty()) throwInputError("config params.{}: an empty list sweeps nothing", key);
+    for (const nlohmann::json& point : points) {
+      if (sweep) {
+        for (const nlohmann::json& option : value) {
+          nlohmann::json extended = point;
+          extended[key] = option;
+          next.push_back(std::move(extended));
+        }
+      } else {
+        nlohmann::json extended = point;
+        extended[key] = value;
+        next.push_back(std::move(extended));
+      }
+    }
+    points = std::move(next);
+  }
+  return points;
+}
+
+std::string hashJson(const nlohmann::json& json) {
+  const std::string text = json.dump();
+  uint64_t hash = 14695981039346656037ULL;
+  for (unsigned char c : text) {
+    hash ^= c;
+    hash *= 1099511628211ULL;
+  }
+  return fmt::format("fnv1a64:{:016x}", hash);
+}
+
+namespace {
+
+std::string variantLabel(const std::string& method, const nlohmann::json& params) {
+  if (params.empty()) return method;
+  std::string label = method + "[";
+  bool first = true;
+  for (const auto& [key, value] : params.items()) {
+    label += (first ? "" : ",") + key + "=" + (value.is_string() ? value.get<std::string>() : value.dump());
+    first = false;
+  }
+  return label + "]";
+}
+
+template <typename T>
+std::vector<T> readList(ConfigObject& config, const std::string& key, std::vector<T> fallback, T lo, T hi) {
+  const nlohmann::json* value = config.find(key);
+  if (!value) return fallback;
+  if (!value->is_array()) throwInputError("config {}: expected a list", config.keyPath(key));
+  std::vector<T> result;
+  for (const nlohmann::json& item : *value) {
+    const T v = config.convert<T>(item, key);
+    if (!(v >= lo && v <= hi)) {
+      throwInputError("config {}: value {} is out of range [{}, {}]", config.keyPath(key), v, lo, hi);
+    }
+    result.push_back(v);
+  }
+  return result;
+}
+
+template <typename T>
+T readNumber(ConfigObject& config, const std::string& key, T fallback, T lo, T hi) {
+  const T value = config.get<T>(key, fallback);
+  if (!(value >= lo && value <= hi)) {
+    throwInputError("config {}: value {} is out of range [{}, {}]", config.keyPath(key), value, lo, hi);
+  }
+  return value;
+}
+
+void readResolution(ConfigObject& config, int& width, int& height) {
+  const auto resolution = readList<int>(config, "resolution", {width, height}, 16, 8192);
+  if (resolution.size() != 2) throwInputError("config {}: expected [width, height]", config.keyPath("resolution"));
+  width = resolution[0];
+  height = resolution[1];
+}
+
+glm::vec3 readVec3(ConfigObject& config, const std::string& key, glm::vec3 fallback, float lo, float hi) {
+  const auto values = readList<float>(config, key, {fallback.x, fallback.y, fallback.z}, lo, hi);
+  if (values.size() != 3) throwInputError("config {}: expected three numbers", config.keyPath(key));
+  return {values[0], values[1], values[2]};
+}
+
+ViewSettings parseViews(ConfigObject& config) {
+  ViewSettings views;
+  RenderSettings& render = views.render;
+  readResolution(config, render.width, render.height);
+  render.supersample = readNumber<int>(config, "supersample", 2, 1, 8);
+  render.fovYDegrees = readNumber<float>(config, "fov_deg", 40.0f, 1.0f, 170.0f);
+  const std::string shading = config.get<std::string>("shading", "unlit");
+  if (shading != "unlit" && shading != "lit") {
+    throwInputError("config {}: '{}' must be \"unlit\" or \"lit\"", config.keyPath("shading"), shading);
+  }
+  render.shading = shading == "lit" ? Shading::kLit : Shading::kUnlit;
+  render.background = readVec3(config, "background", render.background, 0.0f, 1.0f);
+  render.lightDirection = readVec3(config, "light_direction", render.lightDirection, -1.0f, 1.0f);
+  if (glm::length(render.lightDirection) < 1e-3f) {
+    throwInputError("config {}: the light direction must not be zero", config.keyPath("light_direction"));
+  }
+  render.ambient = readNumber<float>(config, "ambient", render.ambient, 0.0f, 1.0f);
+  views.distances = readList<float>(config, "distances", views.distances, 1.01f, 10000.0f);
+  views.elevations = readList<float>(config, "elevations", views.elevations, -90.0f, 90.0f);
+  views.azimuths = readNumber<int>(config, "azimuths", views.azimuths, 1, 360);
+  config.finish("views");
+  return views;
+}
+
+ForestSettings parseForests(ConfigObject& config, const RenderSettings& render) {
+  ForestSettings forests;
+  forests.width = render.width;
+  forests.height = render.height;
+  forests.sizes = readList<int>(config, "sizes", forests.sizes, 1, 1'000'000);
+  forests.frames = readNumber<int>(config, "frames", forests.frames, 1, 100'000);
+  forests.warmup = readNumber<int>(config, "warmup", forests.warmup, 0, 100'000);
+  readResolution(config, forests.width, forests.height);
+  config.finish("forests");
+  return forests;
+}
+
+}  // namespace
+
+ExperimentConfig parseExperimentConfig(const nlohmann::json& json, const std::string& baseDirectory) {
+  ExperimentConfig experiment;
+  experiment.raw = json;
+  experiment.hash = hashJson(json);
+  ConfigObject config(json, "");
+  experiment.name = config.get<std::string>("name");
+  if (!std::regex_match(experiment.name, std::regex("[A-Za-z0-9_.-]+"))) {
+    throwInputError("config name: '{}' may use only letters, digits, '_', '.', '-'", experiment.name);
+  }
+  experiment.seed = static_cast<uint64_t>(readNumber<int64_t>(config, "seed", 1, 0, int64_t(1) << 53));
+  if (config.has("trees")) {
+    for (ConfigObject& tree : config.children("trees")) experiment.trees.push_back(parseTreeSpec(tree, baseDirectory));
+  } else {
+    TreeSpec spec;
+    spec.preset = "broadleaf";
+    experiment.trees.push_back(spec);
+  }
+  std::set<std::string> treeLabels;
+  for (const TreeSpec& tree : experiment.trees) {
+    if (!treeLabels.insert(tree.label()).second) {
+      throwInputError("config trees: '{}' appears twice (give one a \"name\")", tree.label());
+    }
+  }
+  if (config.has("methods")) {
+    for (ConfigObject& entry : config.children("methods")) {
+      const std::string method = entry.get<std::string>("method");
+      const MethodInfo& info = builtinMethods().find(method);
+      const nlohmann::json* params = entry.find("params");
+      if (params && !params->is_object()) throwInputError("config {}: expected an object", entry.keyPath("params"));
+      entry.finish("a method entry");
+      for (const nlohmann::json& point : expandSweep(params ? *params : nlohmann::json::object())) {
+        // Validate every point now, so a bad value fails before hours of work.
+        info.create(point, entry.keyPath("params"));
+        experiment.variants.push_back({method, point, variantLabel(method, point)});
+      }
+    }
+  } else {
+    for (const std::string& name : builtinMethods().names()) experiment.variants.push_back({name, nlohmann::json::object(), name});
+  }
+  std::set<std::string> labels;
+  for (const MethodVariant& variant : experiment.variants) {
+    if (!labels.insert(variant.label).second) throwInputError("config methods: '{}' appears twice", variant.label);
+  }
+  if (config.has("views")) {
+    ConfigObject views = config.child("views");
+    experiment.views = parseViews(views);
+  }
+  if (config.has("forests")) {
+    ConfigObject forests = config.child("forests");
+    experiment.forests = parseForests(forests, experiment.views.render);
+  } else {
+    experiment.forests.width = experiment.views.render.width;
+    experiment.forests.height = experiment.views.render.height;
+  }
+  config.finish();
+  return experiment;
+}
+
+ExperimentConfig readExperimentConfig(const std::string& path) {
+  const nlohmann::json json = readJsonFile(path);
+  try {
+    return parseExperimentConfig(json, std::filesystem::path(path).parent_path().string());
+  } catch (const InputError& error) {
+    throw InputError(path + ": " + error.what());
+  }
+}
+
+}  // namespace canopy

@@ -1,0 +1,59 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/harness.h"
+#include "common/tree_source.h"
+
+namespace canopy {
+
+// One method with one value for every parameter (a point of a sweep).
+struct MethodVariant {
+  std::string method;
+  nlohmann::json params = nlohmann::json::object();  // as configured (scalars only)
+  std::string label;  // "polygonal", "billboard_cloud[clusters=200,density=64]"
+};
+
+struct ViewSettings {
+  RenderSettings render;
+  std::vector<float> distances{1.5f, 4.0f, 12.0f};  // bounding-sphere radii
+  std::vector<float> elevations{0.0f, 30.0f, 60.0f, 90.0f};
+  int azimuths = 8;
+};
+
+struct ForestSettings {
+  std::vector<int> sizes{1, 10, 100};
+  int frames = 60;
+  int warmup = 10;
+  int width = 512;
+  int height = 512;
+};
+
+struct ExperimentConfig {
+  std::string name;
+  uint64_t seed = 1;
+  std::vector<TreeSpec> trees;
+  std::vector<MethodVariant> variants;
+  ViewSettings views;
+  ForestSettings forests;
+  nlohmann::json raw;       // the config as read
+  std::string hash;         // of its canonical form
+};
+
+// Parses and validates a whole config; every unknown key or out-of-range value is an InputError
+// naming the key. `baseDirectory` resolves relative tree files (the config's folder).
+ExperimentConfig parseExperimentConfig(const nlohmann::json& json, const std::string& baseDirectory);
+ExperimentConfig readExperimentConfig(const std::string& path);
+
+// A list where a parameter takes one value is a sweep: the cartesian product of all lists, in
+// key order. Scalars pass through.
+std::vector<nlohmann::json> expandSweep(const nlohmann::json& params);
+
+// FNV-1a 64 of the canonical JSON text, as "fnv1a64:<hex>".
+std::string hashJson(const nlohmann::json& json);
+
+}  // namespace canopy

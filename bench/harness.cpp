@@ -1,0 +1,146 @@
+#include "bench/harness.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+
+#include <glm/geometric.hpp>
+
+namespace canopy {
+
+Harness::Harness(gl::Device& device, RenderSettings settings) : mDevice(device), mSettings(settings) {
+  mSettings.lightDirection = glm::normalize(mSettings.lightDirection);
+}
+
+gl::RenderTarget& Harness::targetOfSize(int width, int height) {
+  for (gl::RenderTarget& target : mTargets) {
+    if (target.width == width && target.height == height) return target;
+  }
+  gl::Device::OwnerScope owner(mDevice, "harness");
+  mTargets.push_back(mDevice.createRenderTarget(width, height, GL_RGBA16F));
+  return mTargets.back();
+}
+
+void Harness::uploadInstances(const std::vector<Instance>& instances) {
+  if (mInstances.id() != 0 && instances.size() == mUploadedInstances.size() &&
+      std::equal(instances.begin(), instances.end(), mUploadedInstances.begin(),
+                 [](const Instance& a, const Instance& b) {
+                   return a.position == b.position && a.rotation == b.rotation && a.scale == b.scale;
+                 })) {
+    return;
+  }
+  std::vector<glm::mat4> matrices;
+  matrices.reserve(instances.size());
+  for (const Instance& instance : instances) matrices.push_back(instance.modelMatrix());
+  gl::Device::OwnerScope owner(mDevice, "harness");
+  mInstances = mDevice.createBuffer(gl::MemoryCategory::kOther, GL_ARRAY_BUFFER, matrices, "instance matrices");
+  mUploadedInstances = instances;
+}
+
+FrameContext Harness::makeFrame(const Camera& camera, int width, int height, GLuint instances) const {
+  FrameContext frame;
+  frame.view = camera.view();
+  frame.projection = camera.projection(float(width) / float(height));
+  frame.cameraPosition = camera.position;
+  frame.viewportSize = {width, height};
+  frame.shading = mSettings.shading;
+  frame.lightDirection = mSettings.lightDirection;
+  frame.ambient = mSettings.ambient;
+  frame.instanceBuffer = instances;
+  return frame;
+}
+
+void Harness::beginFrame(const gl::RenderTarget& target) {
+  const gl::Api& g = gl::api();
+  g.BindFramebuffer(GL_FRAMEBUFFER, target.framebuffer.id());
+  g.Viewport(0, 0, target.width, target.height);
+  // The state every method starts from; methods restore anything else they change.
+  g.Enable(GL_DEPTH_TEST);
+  g.DepthFunc(GL_LESS);
+  g.DepthMask(GL_TRUE);
+  g.Disable(GL_BLEND);
+  g.Disable(GL_CULL_FACE);
+  g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  const float transparent[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+  g.ClearBufferfv(GL_COLOR, 0, transparent);
+  g.Clear(GL_DEPTH_BUFFER_BIT);
+}
+
+ImageRgbaF Harness::renderLinear(Method& method, const Camera& camera) {
+  const int s = mSettings.supersample;
+  gl::RenderTarget& target = targetOfSize(mSettings.width * s, mSettings.height * s);
+  uploadInstances({Instance{}});
+  beginFrame(target);
+  method.draw(makeFrame(camera, target.width, target.height, mInstances.id()), std::span(mUploadedInstances));
+  const gl::Api& g = gl::api();
+  ImageRgbaF full(target.width, target.height);
+  g.BindFramebuffer(GL_FRAMEBUFFER, target.framebuffer.id());
+  g.ReadBuffer(GL_COLOR_ATTACHMENT0);
+  g.PixelStorei(GL_PACK_ALIGNMENT, 4);
+  g.ReadPixels(0, 0, target.width, target.height, GL_RGBA, GL_FLOAT, full.pixels.data());
+  g.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  gl::checkError("Harness::renderLinear");
+  flipRows(full);
+  return boxDownsample(full, s);
+}
+
+ImageRgba8 Harness::render(Method& method, const Camera& camera) {
+  const glm::vec3 background(srgbToLinear(mSettings.background.r), srgbToLinear(mSettings.background.g),
+                             srgbToLinear(mSettings.background.b));
+  return compositeToSrgb8(renderLinear(method, camera), background);
+}
+
+FrameTimes summarizeFrameTimes(std::vector<double> milliseconds) {
+  FrameTimes times;
+  times.frames = static_cast<int>(milliseconds.size());
+  if (milliseconds.empty()) return times;
+  std::sort(milliseconds.begin(), milliseconds.end());
+  const size_t n = milliseconds.size();
+  times.medianMs = n % 2 ? milliseconds[n / 2] : 0.5 * (milliseconds[n / 2 - 1] + milliseconds[n / 2]);
+  const size_t rank = static_cast<size_t>(std::ceil(0.95 * double(n)));
+  times.p95Ms = milliseconds[std::clamp<size_t>(rank, 1, n) - 1];
+  times.meanMs = std::accumulate(milliseconds.begin(), milliseconds.end(), 0.0) / double(n);
+  return times;
+}
+
+FrameTimes Harness::timeForest(Method& method, const std::vector<Instance>& forest, const Aabb& treeBounds,
+                               int frames, int warmup, int width, int height) {
+  gl::RenderTarget& target = targetOfSize(width, height);
+  uploadInstances(forest);
+  const gl::Api& g = gl::api();
+  std::vector<double> times;
+  g.Finish();
+  for (int i = 0; i < warmup + frames; ++i) {
+    const int pathFrame = i < warmup ? i : i - warmup;
+    const Camera camera = forestCamera(forest, treeBounds, pathFrame, frames, mSettings.fovYDegrees);
+    const auto start = std::chrono::steady_clock::now();
+    beginFrame(target);
+    method.draw(makeFrame(camera, width, height, mInstances.id()), std::span(mUploadedInstances));
+    g.Finish();
+    const auto end = std::chrono::steady_clock::now();
+    if (i >= warmup) times.push_back(std::chrono::duration<double, std::milli>(end - start).count());
+  }
+  g.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  gl::checkError("Harness::timeForest");
+  return summarizeFrameTimes(std::move(times));
+}
+
+ImageRgba8 Harness::renderForestFrame(Method& method, const std::vector<Instance>& forest,
+                                      const Aabb& treeBounds, int frame, int frames, int width, int height) {
+  gl::RenderTarget& target = targetOfSize(width, height);
+  uploadInstances(forest);
+  const Camera camera = forestCamera(forest, treeBounds, frame, frames, mSettings.fovYDegrees);
+  beginFrame(target);
+  method.draw(makeFrame(camera, width, height, mInstances.id()), std::span(mUploadedInstances));
+  ImageRgbaF image(width, height);
+  const gl::Api& g = gl::api();
+  g.ReadPixels(0, 0, width, height, GL_RGBA, GL_FLOAT, image.pixels.data());
+  g.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  flipRows(image);
+  const glm::vec3 background(srgbToLinear(mSettings.background.r), srgbToLinear(mSettings.background.g),
+                             srgbToLinear(mSettings.background.b));
+  return compositeToSrgb8(image, background);
+}
+
+}  // namespace canopy

@@ -1,0 +1,71 @@
+#pragma once
+
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "common/gl/device.h"
+#include "common/image.h"
+#include "common/views.h"
+#include "methods/method.h"
+
+namespace canopy {
+
+// How every image is made, for the reference and every method alike.
+struct RenderSettings {
+  int width = 512;               // evaluation resolution
+  int height = 512;
+  int supersample = 2;           // rendered at width·s × height·s, box-filtered down
+  float fovYDegrees = 40.0f;     // vertical field of view
+  Shading shading = Shading::kUnlit;
+  glm::vec3 background{0.5f, 0.6f, 0.75f};      // sRGB, the colour images are composited over
+  glm::vec3 lightDirection{0.3f, 0.8f, 0.5f};   // towards the light (normalised on use)
+  float ambient = 0.35f;
+};
+
+struct FrameTimes {
+  double medianMs = 0.0;
+  double p95Ms = 0.0;
+  double meanMs = 0.0;
+  int frames = 0;
+};
+
+// Renders views and times forests for any method, through the same GL state and targets.
+class Harness {
+ public:
+  Harness(gl::Device& device, RenderSettings settings);
+
+  const RenderSettings& settings() const { return mSettings; }
+
+  // One tree at the origin seen by `camera`: the supersampled render box-filtered to the
+  // evaluation resolution (linear, premultiplied; alpha is coverage).
+  ImageRgbaF renderLinear(Method& method, const Camera& camera);
+  // The same composited over the background and encoded to 8-bit sRGB (alpha keeps coverage).
+  ImageRgba8 render(Method& method, const Camera& camera);
+
+  // Frame times of the forest seen along the benchmark's camera path, glFinish after each frame,
+  // after `warmup` unmeasured frames, at width × height without supersampling.
+  FrameTimes timeForest(Method& method, const std::vector<Instance>& forest, const Aabb& treeBounds,
+                        int frames, int warmup, int width, int height);
+
+  // A frame of a forest as an image (for checks and figures).
+  ImageRgba8 renderForestFrame(Method& method, const std::vector<Instance>& forest,
+                               const Aabb& treeBounds, int frame, int frames, int width, int height);
+
+ private:
+  FrameContext makeFrame(const Camera& camera, int width, int height, GLuint instances) const;
+  gl::RenderTarget& targetOfSize(int width, int height);
+  void uploadInstances(const std::vector<Instance>& instances);
+  void beginFrame(const gl::RenderTarget& target);
+
+  gl::Device& mDevice;
+  RenderSettings mSettings;
+  std::vector<gl::RenderTarget> mTargets;
+  gl::Buffer mInstances;
+  std::vector<Instance> mUploadedInstances;
+};
+
+// Median and 95th percentile (nearest rank) of frame times in milliseconds.
+FrameTimes summarizeFrameTimes(std::vector<double> milliseconds);
+
+}  // namespace canopy

@@ -1,0 +1,35 @@
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace canopy {
+
+// One row per tree × method variant, aggregated from the records of metrics.jsonl.
+struct SummaryRow {
+  std::string tree;
+  std::string method;
+  std::string variant;
+  nlohmann::json params;  // effective
+  nlohmann::json bake;    // the kind:"bake" record (null when absent)
+  double psnr = 0, psnrFrame = 0, ssim = 0, coverageError = 0;
+  int views = 0;
+  std::vector<std::pair<double, double>> psnrByDistance;   // (distance, mean PSNR)
+  std::vector<std::pair<double, double>> psnrByElevation;  // (elevation, mean PSNR)
+  std::vector<nlohmann::json> forests;                     // kind:"forest" records by size
+};
+
+std::vector<SummaryRow> summarize(const std::vector<nlohmann::json>& records);
+
+std::string formatSummaryCsv(const std::vector<SummaryRow>& rows);
+std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std::string& title,
+                                  const std::string& renderer);
+
+// Writes summary.csv and summary.md into `directory` atomically.
+void writeSummaries(const std::filesystem::path& directory, const std::vector<nlohmann::json>& records,
+                    const std::string& title, const std::string& renderer);
+
+}  // namespace canopy

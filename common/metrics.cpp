@@ -1,0 +1,138 @@
+#include "common/metrics.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace canopy {
+
+double psnrFromMse(double mse) {
+  const double floor = 255.0 * 255.0 * std::pow(10.0, -kPsnrCapDb / 10.0);
+  return 10.0 * std::log10(255.0 * 255.0 / std::max(mse, floor));
+}
+
+namespace {
+
+std::vector<float> lumaOf(const ImageRgba8& image) {
+  std::vector<float> luma(size_t(image.width) * image.height);
+  for (size_t i = 0; i < luma.size(); ++i) {
+    const uint8_t* p = &image.pixels[i * 4];
+    luma[i] = 0.299f * p[0] + 0.587f * p[1] + 0.114f * p[2];
+  }
+  return luma;
+}
+
+// Separable Gaussian blur with the window clipped and renormalised at the image border.
+std::vector<float> gaussianBlur(const std::vector<float>& input, int width, int height) {
+  constexpr int kRadius = 5;
+  constexpr float kSigma = 1.5f;
+  float weights[2 * kRadius + 1];
+  for (int i = -kRadius; i <= kRadius; ++i) weights[i + kRadius] = std::exp(-float(i * i) / (2 * kSigma * kSigma));
+  std::vector<float> temporary(input.size()), output(input.size());
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      float sum = 0, norm = 0;
+      for (int k = -kRadius; k <= kRadius; ++k) {
+        const int xx = x + k;
+        if (xx < 0 || xx >= width) continue;
+        sum += weights[k + kRadius] * input[size_t(y) * width + xx];
+        norm += weights[k + kRadius];
+      }
+      temporary[size_t(y) * width + x] = sum / norm;
+    }
+  }
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      float sum = 0, norm = 0;
+      for (int k = -kRadius; k <= kRadius; ++k) {
+        const int yy = y + k;
+        if (yy < 0 || yy >= height) continue;
+        sum += weights[k + kRadius] * temporary[size_t(yy) * width + x];
+        norm += weights[k + kRadius];
+      }
+      output[size_t(y) * width + x] = sum / norm;
+    }
+  }
+  return output;
+}
+
+}  // namespace
+
+double ssimLuma(const ImageRgba8& a, const ImageRgba8& b, int x0, int y0, int x1, int y1) {
+  assert(a.width == b.width && a.height == b.height);
+  if (x1 <= x0 || y1 <= y0) return std::numeric_limits<double>::quiet_NaN();
+  // Work on the rectangle grown by the window radius so windows inside it see real pixels.
+  const int gx0 = std::max(0, x0 - 5), gy0 = std::max(0, y0 - 5);
+  const int gx1 = std::min(a.width, x1 + 5), gy1 = std::min(a.height, y1 + 5);
+  const int w = gx1 - gx0, h = gy1 - gy0;
+  const std::vector<float> lumaA = lumaOf(a), lumaB = lumaOf(b);
+  std::vector<float> pa(size_t(w) * h), pb(pa.size()), paa(pa.size()), pbb(pa.size()), pab(pa.size());
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t src = size_t(y + gy0) * a.width + (x + gx0), dst = size_t(y) * w + x;
+      pa[dst] = lumaA[src];
+      pb[dst] = lumaB[src];
+      paa[dst] = lumaA[src] * lumaA[src];
+      pbb[dst] = lumaB[src] * lumaB[src];
+      pab[dst] = lumaA[src] * lumaB[src];
+    }
+  }
+  const auto ma = gaussianBlur(pa, w, h), mb = gaussianBlur(pb, w, h);
+  const auto maa = gaussianBlur(paa, w, h), mbb = gaussianBlur(pbb, w, h), mab = gaussianBlur(pab, w, h);
+  const double c1 = std::pow(0.01 * 255.0, 2), c2 = std::pow(0.03 * 255.0, 2);
+  double sum = 0.0;
+  long count = 0;
+  for (int y = y0; y < y1; ++y) {
+    for (int x = x0; x < x1; ++x) {
+      const size_t i = size_t(y - gy0) * w + (x - gx0);
+      const double muA = ma[i], muB = mb[i];
+      const double varA = std::max(0.0, double(maa[i]) - muA * muA);
+      const double varB = std::max(0.0, double(mbb[i]) - muB * muB);
+      const double cov = double(mab[i]) - muA * muB;
+      sum += ((2 * muA * muB + c1) * (2 * cov + c2)) / ((muA * muA + muB * muB + c1) * (varA + varB + c2));
+      ++count;
+    }
+  }
+  return sum / double(count);
+}
+
+ImageMetrics compareImages(const ImageRgba8& reference, const ImageRgba8& image) {
+  assert(reference.width == image.width && reference.height == image.height);
+  ImageMetrics metrics;
+  double sumUnion = 0.0, sumFrame = 0.0, coverage = 0.0;
+  int x0 = reference.width, y0 = reference.height, x1 = 0, y1 = 0;
+  for (int y = 0; y < reference.height; ++y) {
+    for (int x = 0; x < reference.width; ++x) {
+      const uint8_t* r = reference.at(x, y);
+      const uint8_t* m = image.at(x, y);
+      double squared = 0.0;
+      for (int c = 0; c < 3; ++c) squared += std::pow(double(r[c]) - double(m[c]), 2);
+      sumFrame += squared;
+      if (r[3] > 0 || m[3] > 0) {
+        sumUnion += squared;
+        coverage += std::abs(int(r[3]) - int(m[3])) / 255.0;
+        ++metrics.unionPixels;
+        x0 = std::min(x0, x);
+        y0 = std::min(y0, y);
+        x1 = std::max(x1, x + 1);
+        y1 = std::max(y1, y + 1);
+      }
+    }
+  }
+  const double frameSamples = 3.0 * reference.width * reference.height;
+  metrics.psnrFrame = psnrFromMse(sumFrame / frameSamples);
+  if (metrics.unionPixels == 0) {
+    // Nothing drawn in either image: the images agree exactly.
+    metrics.psnr = kPsnrCapDb;
+    metrics.ssim = 1.0;
+    return metrics;
+  }
+  metrics.psnr = psnrFromMse(sumUnion / (3.0 * metrics.unionPixels));
+  metrics.coverageError = coverage / double(metrics.unionPixels);
+  metrics.ssim = ssimLuma(reference, image, x0, y0, x1, y1);
+  return metrics;
+}
+
+}  // namespace canopy

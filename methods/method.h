@@ -1,0 +1,125 @@
+#pragma once
+
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+#include <nlohmann/json.hpp>
+
+#include "common/error.h"
+#include "common/gl/device.h"
+#include "common/image.h"
+#include "common/tree.h"
+#include "common/views.h"
+
+namespace canopy {
+
+class ProgressBar;
+
+// What bake() may use besides the tree.
+struct BakeContext {
+  uint64_t seed = 1;                 // every random choice of a bake derives from it
+  ProgressBar* progress = nullptr;   // optional; methods report long loops through it
+};
+
+enum class Shading { kUnlit, kLit };
+
+// Everything a draw needs to know about the frame. Instances are also in instanceBuffer (one
+// mat4 per instance, column-major, in span order) so methods bind them without uploading.
+struct FrameContext {
+  glm::mat4 view{1.0f};
+  glm::mat4 projection{1.0f};
+  glm::vec3 cameraPosition{0.0f};
+  glm::ivec2 viewportSize{0};
+  Shading shading = Shading::kUnlit;
+  glm::vec3 lightDirection{0.3f, 0.8f, 0.5f};  // unit, towards the light (world space)
+  float ambient = 0.35f;                        // ambient term of the lit shading
+  GLuint instanceBuffer = 0;
+};
+
+// A baked impostor written to disk: a folder with asset.json (header) and binary blobs/images.
+// Its size is the method's disk_bytes.
+class AssetFolder {
+ public:
+  explicit AssetFolder(std::filesystem::path folder) : mFolder(std::move(folder)) {}
+  const std::filesystem::path& folder() const { return mFolder; }
+  nlohmann::json& header() { return mHeader; }
+  void writeBlob(const std::string& name, const void* data, size_t bytes);
+  template <typename T>
+  void writeBlob(const std::string& name, const std::vector<T>& data) {
+    writeBlob(name, data.data(), data.size() * sizeof(T));
+  }
+  void writeImage(const std::string& name, const ImageRgba8& image);
+  void writeHeader();
+
+  void readHeader();
+  std::vector<uint8_t> readBlob(const std::string& name) const;
+  template <typename T>
+  std::vector<T> readBlobAs(const std::string& name) const {
+    const std::vector<uint8_t> bytes = readBlob(name);
+    if (bytes.size() % sizeof(T) != 0) throwInputError("{}/{}: truncated blob", mFolder.string(), name);
+    std::vector<T> values(bytes.size() / sizeof(T));
+    std::memcpy(values.data(), bytes.data(), bytes.size());
+    return values;
+  }
+  ImageRgba8 readImage(const std::string& name) const;
+  uint64_t sizeOnDisk() const;
+
+ private:
+  std::filesystem::path mFolder;
+  nlohmann::json mHeader = nlohmann::json::object();
+};
+
+class Method {
+ public:
+  virtual ~Method() = default;
+  // CPU/GPU preprocessing of the tree; deterministic in ctx.seed.
+  virtual void bake(const Tree& tree, BakeContext& ctx) = 0;
+  // Creates every GPU resource, each through the device (and so the ledger).
+  virtual void upload(gl::Device& device) = 0;
+  // Draws the instances into the bound framebuffer.
+  virtual void draw(const FrameContext& frame, std::span<const Instance> instances) = 0;
+  // The parameters the bake really used, in the config's key names.
+  virtual nlohmann::json effectiveParams() const = 0;
+  // The baked representation, so bake and render can run apart.
+  virtual void save(AssetFolder& asset) const = 0;
+  virtual void load(AssetFolder& asset) = 0;
+};
+
+// Creates a method from its config parameters (an object, or null for defaults); throws
+// InputError naming `configPath` and the key for unknown keys or out-of-range values.
+using MethodFactory = std::function<std::unique_ptr<Method>(const nlohmann::json& params,
+                                                            const std::string& configPath)>;
+
+struct MethodInfo {
+  std::string name;         // the config's "method" value
+  std::string description;  // one line, for --list-methods and docs
+  MethodFactory create;
+};
+
+class MethodRegistry {
+ public:
+  void add(MethodInfo info);
+  const MethodInfo& find(const std::string& name) const;  // InputError naming the known methods
+  std::vector<std::string> names() const;
+
+ private:
+  std::vector<MethodInfo> mMethods;
+};
+
+// The registry of every built-in method, filled by registry.cpp (one explicit call each).
+const MethodRegistry& builtinMethods();
+
+// Binds frame.instanceBuffer as four vec4 attributes (a mat4) starting at `location`, one per
+// instance, on the currently bound vertex array.
+void bindInstanceMatrices(GLuint instanceBuffer, GLuint location);
+
+}  // namespace canopy

@@ -1,0 +1,19 @@
+#version 430 core
+// Shared by wood and leaves: world transform per instance, normal to world space.
+layout(location = 0) in vec3 inPosition;
+layout(location = 1) in vec3 inNormal;
+layout(location = 2) in vec2 inUv;
+layout(location = 4) in mat4 inModel;  // per instance, locations 4..7
+
+uniform mat4 uViewProjection;
+
+out vec3 vNormal;
+out vec2 vUv;
+
+void main() {
+  vec4 world = inModel * vec4(inPosition, 1.0);
+  // Instances are rotations about up and uniform scales, so the model matrix maps normals too.
+  vNormal = mat3(inModel) * inNormal;
+  vUv = inUv;
+  gl_Position = uViewProjection * world;
+}

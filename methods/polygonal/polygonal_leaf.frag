@@ -1,0 +1,22 @@
+#version 430 core
+// Leaves: front or back image by facing, alpha test at 0.5, unlit albedo or two-sided Lambert.
+in vec3 vNormal;
+in vec2 vUv;
+
+uniform sampler2DArray uLeafImages;  // layer 0 front, layer 1 back; sRGB, so samples are linear
+uniform int uLit;
+uniform vec3 uLightDirection;
+uniform float uAmbient;
+
+out vec4 outColor;
+
+void main() {
+  vec4 texel = texture(uLeafImages, vec3(vUv, gl_FrontFacing ? 0.0 : 1.0));
+  if (texel.a < 0.5) discard;
+  vec3 color = texel.rgb;
+  if (uLit != 0) {
+    vec3 normal = normalize(gl_FrontFacing ? vNormal : -vNormal);
+    color *= uAmbient + (1.0 - uAmbient) * max(dot(normal, uLightDirection), 0.0);
+  }
+  outColor = vec4(color, 1.0);  // premultiplied: opaque after the alpha test
+}
