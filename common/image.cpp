@@ -57,7 +57,10 @@ ImageRgba8 readImage(const std::filesystem::path& path) {
   if (!std::filesystem::is_regular_file(path)) {
     throwInputError("{}: image file does not exist", path.string());
   }
-  auto input = OIIO::ImageInput::open(path.string());
+  // Leaf textures keep straight alpha: OIIO would otherwise premultiply PNG colour on read.
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  auto input = OIIO::ImageInput::open(path.string(), &config);
   if (!input) {
     throwInputError("{}: not a readable image ({})", path.string(), OIIO::geterror());
   }
@@ -67,7 +70,9 @@ ImageRgba8 readImage(const std::filesystem::path& path) {
 ImageRgba8 readImageFromMemory(const void* data, size_t size, const std::string& formatHint,
                                const std::string& name) {
   OIIO::Filesystem::IOMemReader reader(data, size);
-  auto input = OIIO::ImageInput::open("embedded." + formatHint, nullptr, &reader);
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  auto input = OIIO::ImageInput::open("embedded." + formatHint, &config, &reader);
   if (!input) throwInputError("{}: not a readable image ({})", name, OIIO::geterror());
   return decodeImage(*input, name);
 }
@@ -79,6 +84,7 @@ void writePng(const std::filesystem::path& path, const ImageRgba8& image) {
     if (!output) throw std::runtime_error("OpenImageIO has no PNG writer");
     OIIO::ImageSpec spec(image.width, image.height, 4, OIIO::TypeDesc::UINT8);
     spec.attribute("oiio:ColorSpace", "sRGB");
+    spec.attribute("oiio:UnassociatedAlpha", 1);  // our pixels are straight alpha: store as is
     if (!output->open(temporary.string(), spec) ||
         !output->write_image(OIIO::TypeDesc::UINT8, image.pixels.data()) || !output->close()) {
       throw std::runtime_error(path.string() + ": cannot write PNG: " + output->geterror());

@@ -15,25 +15,25 @@ double psnrFromMse(double mse) {
 
 namespace {
 
-std::vector<float> lumaOf(const ImageRgba8& image) {
-  std::vector<float> luma(size_t(image.width) * image.height);
+std::vector<double> lumaOf(const ImageRgba8& image) {
+  std::vector<double> luma(size_t(image.width) * image.height);
   for (size_t i = 0; i < luma.size(); ++i) {
     const uint8_t* p = &image.pixels[i * 4];
-    luma[i] = 0.299f * p[0] + 0.587f * p[1] + 0.114f * p[2];
+    luma[i] = 0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2];
   }
   return luma;
 }
 
 // Separable Gaussian blur with the window clipped and renormalised at the image border.
-std::vector<float> gaussianBlur(const std::vector<float>& input, int width, int height) {
+std::vector<double> gaussianBlur(const std::vector<double>& input, int width, int height) {
   constexpr int kRadius = 5;
-  constexpr float kSigma = 1.5f;
-  float weights[2 * kRadius + 1];
-  for (int i = -kRadius; i <= kRadius; ++i) weights[i + kRadius] = std::exp(-float(i * i) / (2 * kSigma * kSigma));
-  std::vector<float> temporary(input.size()), output(input.size());
+  constexpr double kSigma = 1.5;
+  double weights[2 * kRadius + 1];
+  for (int i = -kRadius; i <= kRadius; ++i) weights[i + kRadius] = std::exp(-double(i * i) / (2 * kSigma * kSigma));
+  std::vector<double> temporary(input.size()), output(input.size());
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
-      float sum = 0, norm = 0;
+      double sum = 0, norm = 0;
       for (int k = -kRadius; k <= kRadius; ++k) {
         const int xx = x + k;
         if (xx < 0 || xx >= width) continue;
@@ -45,7 +45,7 @@ std::vector<float> gaussianBlur(const std::vector<float>& input, int width, int 
   }
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
-      float sum = 0, norm = 0;
+      double sum = 0, norm = 0;
       for (int k = -kRadius; k <= kRadius; ++k) {
         const int yy = y + k;
         if (yy < 0 || yy >= height) continue;
@@ -67,8 +67,8 @@ double ssimLuma(const ImageRgba8& a, const ImageRgba8& b, int x0, int y0, int x1
   const int gx0 = std::max(0, x0 - 5), gy0 = std::max(0, y0 - 5);
   const int gx1 = std::min(a.width, x1 + 5), gy1 = std::min(a.height, y1 + 5);
   const int w = gx1 - gx0, h = gy1 - gy0;
-  const std::vector<float> lumaA = lumaOf(a), lumaB = lumaOf(b);
-  std::vector<float> pa(size_t(w) * h), pb(pa.size()), paa(pa.size()), pbb(pa.size()), pab(pa.size());
+  const std::vector<double> lumaA = lumaOf(a), lumaB = lumaOf(b);
+  std::vector<double> pa(size_t(w) * h), pb(pa.size()), paa(pa.size()), pbb(pa.size()), pab(pa.size());
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       const size_t src = size_t(y + gy0) * a.width + (x + gx0), dst = size_t(y) * w + x;

@@ -1,0 +1,144 @@
+// canopy-bench as a user runs it: exit codes, the results layout, resume and shards.
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <set>
+#include <thread>
+
+#include "bench/results_store.h"
+#include "common/config.h"
+#include "test_support.h"
+
+namespace canopy {
+namespace {
+
+const std::string kBench = CANOPY_BENCH_EXE;
+
+std::string tinyConfig(const std::string& name, int azimuths = 2) {
+  return R"({"name": ")" + name + R"(", "trees": [{"preset": "sparse", "seed": 3, "leaves": 300}],
+    "methods": [{"method": "polygonal"}, {"method": "polygonal", "params": {"wood": false}}],
+    "views": {"resolution": [64, 64], "distances": [2, 6], "elevations": [0, 90], "azimuths": )" +
+         std::to_string(azimuths) + R"(},
+    "forests": {"sizes": [1, 4], "frames": 3, "warmup": 1}})";
+}
+
+std::multiset<std::string> keysOf(const std::filesystem::path& metrics) {
+  std::multiset<std::string> keys;
+  for (const auto& record : ResultsStore::readRecords(metrics)) keys.insert(record.at("record_key").get<std::string>());
+  return keys;
+}
+
+TEST(BenchCli, RunsAConfigIntoTheResultsLayoutAndSkipsWhatIsDone) {
+  test::TempDir dir;
+  test::writeText(dir / "tiny.json", tinyConfig("tiny"));
+  const std::string command = kBench + " --quiet --config " + (dir / "tiny.json").string() + " --out " + (dir / "out").string();
+  ASSERT_EQ(test::runCommand(command), 0);
+  for (const char* file : {"metrics.jsonl", "summary.csv", "summary.md", "meta.json"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / "out" / file)) << file;
+  }
+  const auto records = ResultsStore::readRecords(dir / "out" / "metrics.jsonl");
+  // 1 tree + 2 variants × (1 bake + 8 views + 2 forests).
+  ASSERT_EQ(records.size(), 1u + 2u * (1u + 8u + 2u));
+  int views = 0;
+  for (const auto& record : records) {
+    const std::string kind = record.at("kind");
+    if (kind == "view") {
+      ++views;
+      for (const char* key : {"tree", "method", "params", "distance", "elevation", "azimuth", "psnr", "psnr_frame", "ssim", "coverage_error"}) {
+        EXPECT_TRUE(record.contains(key)) << key;
+      }
+      if (record.at("variant") == "polygonal") EXPECT_DOUBLE_EQ(record.at("psnr").get<double>(), 100.0);
+    } else if (kind == "forest") {
+      for (const char* key : {"trees", "frame_ms_median", "frame_ms_p95", "fps", "speedup_vs_polygonal"}) EXPECT_TRUE(record.contains(key)) << key;
+    } else if (kind == "bake") {
+      EXPECT_GT(record.at("memory_bytes").at("total").get<double>(), 0.0);
+      EXPECT_GT(record.at("disk_bytes").get<double>(), 0.0);
+    } else {
+      EXPECT_EQ(kind, "tree");
+      EXPECT_EQ(record.at("leaves"), 300);
+    }
+  }
+  EXPECT_EQ(views, 16);
+  const auto meta = readJsonFile((dir / "out" / "meta.json").string());
+  EXPECT_FALSE(meta.at("gl").at("renderer").get<std::string>().empty());
+  EXPECT_EQ(meta.at("config_hash").get<std::string>().rfind("fnv1a64:", 0), 0u);
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "images" / "sparse_s3_l300" / "reference" / "d2_e0_a0.png"));
+  // A rerun recomputes nothing: the same records, no duplicates.
+  const auto keysBefore = keysOf(dir / "out" / "metrics.jsonl");
+  ASSERT_EQ(test::runCommand(command), 0);
+  EXPECT_EQ(keysOf(dir / "out" / "metrics.jsonl"), keysBefore);
+}
+
+TEST(BenchCli, BadInputExitsWithCode2AndOneLineNamingTheProblem) {
+  test::TempDir dir;
+  const auto expectBadInput = [&](const std::string& config, const std::string& words) {
+    test::writeText(dir / "bad.json", config);
+    std::string error;
+    const int code = test::runCommand(kBench + " --quiet --config " + (dir / "bad.json").string() + " --out " +
+                                          (dir / "out").string(), &error);
+    EXPECT_EQ(code, 2) << config;
+    EXPECT_NE(error.find(words), std::string::npos) << error;
+    EXPECT_EQ(std::count(error.begin(), error.end(), '\n'), 1) << error;
+  };
+  expectBadInput(R"({"name": "x", "view": {}})", "view");
+  expectBadInput(R"({"name": "x", "methods": [{"method": "polygonal", "params": {"wod": 1}}]})", "wod");
+  expectBadInput(R"({"name": "x", "views": {"supersample": 99}})", "views.supersample");
+  expectBadInput(R"({"name": "x", "trees": [{"file": "/nonexistent/oak.glb"}]})", "/nonexistent/oak.glb");
+  expectBadInput(R"({"name": "x", "methods": [{"method": "impostor9000"}]})", "impostor9000");
+  expectBadInput(R"({"name": "x", )", "bad.json");
+  std::string error;
+  EXPECT_EQ(test::runCommand(kBench + " --config " + (dir / "missing.json").string(), &error), 2);
+  EXPECT_NE(error.find("missing.json"), std::string::npos);
+  EXPECT_EQ(test::runCommand(kBench + " --config " + (dir / "bad.json").string() + " --gl vulkan", &error), 2);
+  EXPECT_EQ(test::runCommand(kBench + " --config " + (dir / "bad.json").string() + " --shard 3/2", &error), 2);
+}
+
+TEST(BenchCli, ShardsTogetherMakeTheWholeRun) {
+  test::TempDir dir;
+  test::writeText(dir / "tiny.json", tinyConfig("tiny", 1));
+  const std::string base = kBench + " --quiet --no-images --config " + (dir / "tiny.json").string();
+  ASSERT_EQ(test::runCommand(base + " --out " + (dir / "all").string()), 0);
+  ASSERT_EQ(test::runCommand(base + " --shard 0/2 --out " + (dir / "s0").string()), 0);
+  ASSERT_EQ(test::runCommand(base + " --shard 1/2 --out " + (dir / "s1").string()), 0);
+  std::multiset<std::string> shards = keysOf(dir / "s0" / "metrics.jsonl");
+  for (const auto& key : keysOf(dir / "s1" / "metrics.jsonl")) {
+    if (key.rfind("tree|", 0) != 0 || !shards.contains(key)) shards.insert(key);  // both shards load the tree
+  }
+  EXPECT_EQ(shards, keysOf(dir / "all" / "metrics.jsonl"));
+}
+
+TEST(BenchCli, KilledRunResumesWithoutLosingOrDuplicatingRecords) {
+  test::TempDir dir;
+  test::writeText(dir / "tiny.json", tinyConfig("tiny", 12));
+  const std::string out = (dir / "out").string();
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::execl(kBench.c_str(), kBench.c_str(), "--quiet", "--config", (dir / "tiny.json").c_str(), "--out", out.c_str(),
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  // Kill -9 once some records exist, in the middle of the run.
+  const auto metrics = dir / "out" / "metrics.jsonl";
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (std::filesystem::exists(metrics) && ResultsStore::readRecords(metrics).size() >= 10) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ::kill(child, SIGKILL);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  const size_t before = ResultsStore::readRecords(metrics).size();
+  ASSERT_GE(before, 10u);
+  ASSERT_EQ(test::runCommand(kBench + " --quiet --config " + (dir / "tiny.json").string() + " --out " + out), 0);
+  const auto keys = keysOf(metrics);
+  EXPECT_EQ(std::set<std::string>(keys.begin(), keys.end()).size(), keys.size()) << "no duplicates";
+  EXPECT_EQ(keys.size(), 1u + 2u * (1u + 48u + 2u)) << "nothing lost";
+}
+
+}  // namespace
+}  // namespace canopy

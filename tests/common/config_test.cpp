@@ -1,0 +1,62 @@
+#include "common/config.h"
+
+#include <gtest/gtest.h>
+
+#include "bench/experiment.h"
+
+namespace canopy {
+namespace {
+
+using nlohmann::json;
+
+std::string errorOf(const json& config) {
+  try {
+    parseExperimentConfig(config, "");
+  } catch (const InputError& error) {
+    return error.what();
+  }
+  return "";
+}
+
+TEST(Config, UnknownKeysAreErrorsNamingTheKey) {
+  EXPECT_NE(errorOf({{"name", "x"}, {"method", "polygonal"}}).find("method"), std::string::npos);
+  EXPECT_NE(errorOf({{"name", "x"}, {"views", {{"distance", {2}}}}}).find("views.distance"), std::string::npos);
+  const std::string error = errorOf({{"name", "x"}, {"methods", {{{"method", "polygonal"}, {"params", {{"wod", false}}}}}}});
+  EXPECT_NE(error.find("wod"), std::string::npos) << error;
+  EXPECT_NE(error.find("polygonal"), std::string::npos) << error;
+}
+
+TEST(Config, OutOfRangeAndWrongTypesAreErrors) {
+  EXPECT_NE(errorOf({{"name", "x"}, {"views", {{"supersample", 0}}}}).find("views.supersample"), std::string::npos);
+  EXPECT_NE(errorOf({{"name", "x"}, {"views", {{"distances", {0.5}}}}}).find("views.distances"), std::string::npos);
+  EXPECT_NE(errorOf({{"name", "x"}, {"views", {{"shading", "pbr"}}}}).find("views.shading"), std::string::npos);
+  EXPECT_NE(errorOf({{"name", "x"}, {"forests", {{"frames", "ten"}}}}).find("forests.frames"), std::string::npos);
+  EXPECT_NE(errorOf({{"name", "x"}, {"methods", {{{"method", "nope"}}}}}).find("nope"), std::string::npos);
+  EXPECT_NE(errorOf({{"name", "x"}, {"trees", {{{"preset", "palm"}}}}}).find("palm"), std::string::npos);
+  EXPECT_NE(errorOf(json::object()).find("name"), std::string::npos);
+}
+
+TEST(Config, ListsInParamsAreSweeps) {
+  const auto points = expandSweep({{"a", {1, 2}}, {"b", {"x", "y", "z"}}, {"c", 5}});
+  ASSERT_EQ(points.size(), 6u);
+  EXPECT_EQ(points[0], json({{"a", 1}, {"b", "x"}, {"c", 5}}));
+  EXPECT_EQ(points[5], json({{"a", 2}, {"b", "z"}, {"c", 5}}));
+  const ExperimentConfig config = parseExperimentConfig(
+      {{"name", "s"}, {"methods", {{{"method", "polygonal"}, {"params", {{"wood", {true, false}}}}}}}}, "");
+  ASSERT_EQ(config.variants.size(), 2u);
+  EXPECT_EQ(config.variants[0].label, "polygonal[wood=true]");
+  EXPECT_EQ(config.variants[1].label, "polygonal[wood=false]");
+}
+
+TEST(Config, DefaultsAreDesignDefaults) {
+  const ExperimentConfig config = parseExperimentConfig({{"name", "d"}}, "");
+  EXPECT_EQ(config.views.render.supersample, 2);
+  EXPECT_EQ(config.views.render.width, 512);
+  EXPECT_EQ(config.views.elevations, (std::vector<float>{0, 30, 60, 90}));
+  EXPECT_EQ(config.trees.size(), 1u);
+  EXPECT_FALSE(config.variants.empty());
+  EXPECT_EQ(config.hash, hashJson({{"name", "d"}}));
+}
+
+}  // namespace
+}  // namespace canopy

@@ -1,0 +1,129 @@
+// The contract every registered method meets: it bakes, uploads through the ledger (memory > 0),
+// renders the tree where it is without GL errors, is deterministic, reports parameters that
+// recreate it, and survives a save/load round trip with the same images.
+#include <gtest/gtest.h>
+
+#include "bench/harness.h"
+#include "common/gl/api.h"
+#include "methods/method.h"
+#include "test_support.h"
+
+namespace canopy {
+namespace {
+
+class MethodContract : public testing::TestWithParam<std::string> {
+ protected:
+  void SetUp() override {
+    mContext = test::makeTestContext();
+    mDevice = std::make_unique<gl::Device>(mLedger);
+    RenderSettings settings;
+    settings.width = settings.height = 96;
+    settings.supersample = 2;
+    mHarness = std::make_unique<Harness>(*mDevice, settings);
+  }
+
+  std::unique_ptr<Method> create(const nlohmann::json& params = nlohmann::json::object()) {
+    return builtinMethods().find(GetParam()).create(params, "test");
+  }
+
+  std::unique_ptr<Method> bakeAndUpload(const Tree& tree, const std::string& owner,
+                                        const nlohmann::json& params = nlohmann::json::object()) {
+    auto method = create(params);
+    BakeContext context;
+    context.seed = 11;
+    method->bake(tree, context);
+    gl::Device::OwnerScope scope(*mDevice, owner);
+    method->upload(*mDevice);
+    return method;
+  }
+
+  Camera camera(const Tree& tree, float elevation = 20.0f) const {
+    return orbitCamera(tree.bounds, {3.0f, elevation, 30.0f}, 40.0f);
+  }
+
+  static long coveredPixels(const ImageRgba8& image) {
+    long covered = 0;
+    for (size_t i = 3; i < image.pixels.size(); i += 4) covered += image.pixels[i] > 0;
+    return covered;
+  }
+
+  std::unique_ptr<gl::Context> mContext;
+  gl::Ledger mLedger;
+  std::unique_ptr<gl::Device> mDevice;
+  std::unique_ptr<Harness> mHarness;
+};
+
+TEST_P(MethodContract, BakesUploadsThroughTheLedgerAndRendersTheTree) {
+  const Tree tree = test::smallTree();
+  auto method = bakeAndUpload(tree, "m");
+  EXPECT_GT(mLedger.totals("m").total(), 0u);
+  EXPECT_EQ(mLedger.totals("unowned").total(), 0u) << "every allocation has an owner";
+  const ImageRgba8 image = mHarness->render(*method, camera(tree));
+  EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
+  // The tree fills a good part of a 96² view at three radii, and not all of it.
+  const long covered = coveredPixels(image);
+  EXPECT_GT(covered, 96 * 96 / 50);
+  EXPECT_LT(covered, 96 * 96);
+  method.reset();
+  EXPECT_EQ(mLedger.totals("m").total(), 0u) << "resources released with the method";
+}
+
+TEST_P(MethodContract, SameSeedGivesTheSameImages) {
+  const Tree tree = test::smallTree();
+  auto first = bakeAndUpload(tree, "a");
+  auto second = bakeAndUpload(tree, "b");
+  const ImageRgba8 a = mHarness->render(*first, camera(tree));
+  EXPECT_EQ(a, mHarness->render(*first, camera(tree))) << "rendering twice";
+  EXPECT_EQ(a, mHarness->render(*second, camera(tree))) << "baking twice";
+}
+
+TEST_P(MethodContract, EffectiveParamsRecreateTheMethod) {
+  auto method = create();
+  const nlohmann::json params = method->effectiveParams();
+  ASSERT_TRUE(params.is_object());
+  EXPECT_EQ(create(params)->effectiveParams(), params);
+  EXPECT_THROW(create({{"no_such_parameter", 1}}), InputError);
+}
+
+TEST_P(MethodContract, SavedAssetLoadsAndRendersTheSame) {
+  const Tree tree = test::smallTree();
+  auto method = bakeAndUpload(tree, "original");
+  test::TempDir dir;
+  AssetFolder asset(dir.path());
+  method->save(asset);
+  EXPECT_GT(asset.sizeOnDisk(), 0u);
+  auto loaded = create(method->effectiveParams());
+  AssetFolder reader(dir.path());
+  loaded->load(reader);
+  {
+    gl::Device::OwnerScope scope(*mDevice, "loaded");
+    loaded->upload(*mDevice);
+  }
+  EXPECT_EQ(mLedger.totals("loaded").total(), mLedger.totals("original").total());
+  EXPECT_EQ(mHarness->render(*method, camera(tree, 60.0f)), mHarness->render(*loaded, camera(tree, 60.0f)));
+}
+
+TEST_P(MethodContract, DrawsForestsWithoutGlErrors) {
+  const Tree tree = test::smallTree();
+  auto method = bakeAndUpload(tree, "m");
+  const auto forest = layoutForest(9, tree.boundingSphereRadius(), 3);
+  const FrameTimes times = mHarness->timeForest(*method, forest, tree.bounds, 3, 1, 64, 64);
+  EXPECT_EQ(times.frames, 3);
+  EXPECT_GT(times.medianMs, 0.0);
+  const ImageRgba8 frame = mHarness->renderForestFrame(*method, forest, tree.bounds, 0, 3, 96, 96);
+  EXPECT_GT(coveredPixels(frame), 0);
+  EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryRegisteredMethod, MethodContract, testing::ValuesIn(builtinMethods().names()),
+                         [](const testing::TestParamInfo<std::string>& info) { return info.param; });
+
+TEST(Harness, FrameTimeStatistics) {
+  const FrameTimes times = summarizeFrameTimes({5, 1, 3, 2, 4, 100, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19});
+  EXPECT_DOUBLE_EQ(times.medianMs, 10.5);   // even count: mean of the two middle values
+  EXPECT_DOUBLE_EQ(times.p95Ms, 19.0);      // nearest rank: ceil(0.95·20) = 19th of 20
+  EXPECT_EQ(times.frames, 20);
+}
+
+}  // namespace
+}  // namespace canopy

@@ -1,0 +1,63 @@
+#pragma once
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+
+#include "common/gl/context.h"
+#include "common/lsystem.h"
+
+namespace canopy::test {
+
+// A fresh folder under the system temp dir, removed at the end of the test.
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern = (std::filesystem::temp_directory_path() / "canopy_test_XXXXXX").string();
+    mPath = ::mkdtemp(pattern.data());
+  }
+  ~TempDir() {
+    std::error_code ignored;
+    std::filesystem::remove_all(mPath, ignored);
+  }
+  const std::filesystem::path& path() const { return mPath; }
+  std::filesystem::path operator/(const std::string& name) const { return mPath / name; }
+
+ private:
+  std::filesystem::path mPath;
+};
+
+inline void writeText(const std::filesystem::path& path, const std::string& text) {
+  std::filesystem::create_directories(path.parent_path());
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+// A small built-in tree so tests stay fast: the sparse preset with `leaves` leaves.
+inline Tree smallTree(int leaves = 400, uint64_t seed = 7) {
+  LSystemTreeParams params = treePreset("sparse");
+  params.leaves = leaves;
+  params.leafTextureSize = 64;
+  return generateTree(params, seed);
+}
+
+// The headless context the tests render with (OSMesa, as on CI machines without a GPU).
+inline std::unique_ptr<gl::Context> makeTestContext() { return gl::createContext({gl::Backend::kOsMesa}); }
+
+// Runs a command; returns its exit code and captures stderr into `errorOutput`.
+inline int runCommand(const std::string& command, std::string* errorOutput = nullptr) {
+  const std::string errorFile = (std::filesystem::temp_directory_path() /
+                                 ("canopy_cmd_" + std::to_string(::getpid()) + ".err")).string();
+  const int status = std::system((command + " > /dev/null 2> " + errorFile).c_str());
+  if (errorOutput) {
+    std::ifstream in(errorFile);
+    errorOutput->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  std::filesystem::remove(errorFile);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+}  // namespace canopy::test
