@@ -4,6 +4,8 @@ BUILD_DIR := build/$(PRESET)
 BIN := $(BUILD_DIR)/bin
 CONFIG ?= configs/default.json
 JOBS ?= $(shell nproc)
+# Debian's interpreter, which has python3-matplotlib (a python3 earlier on PATH may not).
+PYTHON ?= /usr/bin/python3
 
 .PHONY: deps configure build test bench figures format clean
 
@@ -23,7 +25,7 @@ bench: build
 	@$(BIN)/canopy-bench --config $(CONFIG)
 
 figures: deps
-	@python3 paper_figures/make_figures.py results
+	@$(PYTHON) paper_figures/make_figures.py results
 
 format:
 	@find common methods bench viewer tests -name '*.cpp' -o -name '*.h' | xargs clang-format -i

@@ -16,7 +16,8 @@ std::vector<nlohmann::json> expandSweep(const nlohmann::json& params) {
   for (const auto& [key, value] : params.items()) {
     std::vector<nlohmann::json> next;
     const bool sweep = value.is_array();
-    if (sweep && value.empty()) throwInputError("config params.{}: an empty list sweeps nothing", key);
+    if (sweep && value.empty())
+      throwInputError("config params.{}: an empty list sweeps nothing", key);
     for (const nlohmann::json& point : points) {
       if (sweep) {
         for (const nlohmann::json& option : value) {
@@ -52,14 +53,16 @@ std::string variantLabel(const std::string& method, const nlohmann::json& params
   std::string label = method + "[";
   bool first = true;
   for (const auto& [key, value] : params.items()) {
-    label += (first ? "" : ",") + key + "=" + (value.is_string() ? value.get<std::string>() : value.dump());
+    label += (first ? "" : ",") + key + "=" +
+             (value.is_string() ? value.get<std::string>() : value.dump());
     first = false;
   }
   return label + "]";
 }
 
 template <typename T>
-std::vector<T> readList(ConfigObject& config, const std::string& key, std::vector<T> fallback, T lo, T hi) {
+std::vector<T> readList(ConfigObject& config, const std::string& key, std::vector<T> fallback, T lo,
+                        T hi) {
   const nlohmann::json* value = config.find(key);
   if (!value) return fallback;
   if (!value->is_array()) throwInputError("config {}: expected a list", config.keyPath(key));
@@ -67,7 +70,8 @@ std::vector<T> readList(ConfigObject& config, const std::string& key, std::vecto
   for (const nlohmann::json& item : *value) {
     const T v = config.convert<T>(item, key);
     if (!(v >= lo && v <= hi)) {
-      throwInputError("config {}: value {} is out of range [{}, {}]", config.keyPath(key), v, lo, hi);
+      throwInputError("config {}: value {} is out of range [{}, {}]", config.keyPath(key), v, lo,
+                      hi);
     }
     result.push_back(v);
   }
@@ -78,19 +82,22 @@ template <typename T>
 T readNumber(ConfigObject& config, const std::string& key, T fallback, T lo, T hi) {
   const T value = config.get<T>(key, fallback);
   if (!(value >= lo && value <= hi)) {
-    throwInputError("config {}: value {} is out of range [{}, {}]", config.keyPath(key), value, lo, hi);
+    throwInputError("config {}: value {} is out of range [{}, {}]", config.keyPath(key), value, lo,
+                    hi);
   }
   return value;
 }
 
 void readResolution(ConfigObject& config, int& width, int& height) {
   const auto resolution = readList<int>(config, "resolution", {width, height}, 16, 8192);
-  if (resolution.size() != 2) throwInputError("config {}: expected [width, height]", config.keyPath("resolution"));
+  if (resolution.size() != 2)
+    throwInputError("config {}: expected [width, height]", config.keyPath("resolution"));
   width = resolution[0];
   height = resolution[1];
 }
 
-glm::vec3 readVec3(ConfigObject& config, const std::string& key, glm::vec3 fallback, float lo, float hi) {
+glm::vec3 readVec3(ConfigObject& config, const std::string& key, glm::vec3 fallback, float lo,
+                   float hi) {
   const auto values = readList<float>(config, key, {fallback.x, fallback.y, fallback.z}, lo, hi);
   if (values.size() != 3) throwInputError("config {}: expected three numbers", config.keyPath(key));
   return {values[0], values[1], values[2]};
@@ -104,13 +111,15 @@ ViewSettings parseViews(ConfigObject& config) {
   render.fovYDegrees = readNumber<float>(config, "fov_deg", 40.0f, 1.0f, 170.0f);
   const std::string shading = config.get<std::string>("shading", "unlit");
   if (shading != "unlit" && shading != "lit") {
-    throwInputError("config {}: '{}' must be \"unlit\" or \"lit\"", config.keyPath("shading"), shading);
+    throwInputError("config {}: '{}' must be \"unlit\" or \"lit\"", config.keyPath("shading"),
+                    shading);
   }
   render.shading = shading == "lit" ? Shading::kLit : Shading::kUnlit;
   render.background = readVec3(config, "background", render.background, 0.0f, 1.0f);
   render.lightDirection = readVec3(config, "light_direction", render.lightDirection, -1.0f, 1.0f);
   if (glm::length(render.lightDirection) < 1e-3f) {
-    throwInputError("config {}: the light direction must not be zero", config.keyPath("light_direction"));
+    throwInputError("config {}: the light direction must not be zero",
+                    config.keyPath("light_direction"));
   }
   render.ambient = readNumber<float>(config, "ambient", render.ambient, 0.0f, 1.0f);
   views.distances = readList<float>(config, "distances", views.distances, 1.01f, 10000.0f);
@@ -134,18 +143,22 @@ ForestSettings parseForests(ConfigObject& config, const RenderSettings& render) 
 
 }  // namespace
 
-ExperimentConfig parseExperimentConfig(const nlohmann::json& json, const std::string& baseDirectory) {
+ExperimentConfig parseExperimentConfig(const nlohmann::json& json,
+                                       const std::string& baseDirectory) {
   ExperimentConfig experiment;
   experiment.raw = json;
   experiment.hash = hashJson(json);
   ConfigObject config(json, "");
   experiment.name = config.get<std::string>("name");
   if (!std::regex_match(experiment.name, std::regex("[A-Za-z0-9_.-]+"))) {
-    throwInputError("config name: '{}' may use only letters, digits, '_', '.', '-'", experiment.name);
+    throwInputError("config name: '{}' may use only letters, digits, '_', '.', '-'",
+                    experiment.name);
   }
-  experiment.seed = static_cast<uint64_t>(readNumber<int64_t>(config, "seed", 1, 0, int64_t(1) << 53));
+  experiment.seed =
+      static_cast<uint64_t>(readNumber<int64_t>(config, "seed", 1, 0, int64_t(1) << 53));
   if (config.has("trees")) {
-    for (ConfigObject& tree : config.children("trees")) experiment.trees.push_back(parseTreeSpec(tree, baseDirectory));
+    for (ConfigObject& tree : config.children("trees"))
+      experiment.trees.push_back(parseTreeSpec(tree, baseDirectory));
   } else {
     TreeSpec spec;
     spec.preset = "broadleaf";
@@ -162,7 +175,8 @@ ExperimentConfig parseExperimentConfig(const nlohmann::json& json, const std::st
       const std::string method = entry.get<std::string>("method");
       const MethodInfo& info = builtinMethods().find(method);
       const nlohmann::json* params = entry.find("params");
-      if (params && !params->is_object()) throwInputError("config {}: expected an object", entry.keyPath("params"));
+      if (params && !params->is_object())
+        throwInputError("config {}: expected an object", entry.keyPath("params"));
       entry.finish("a method entry");
       for (const nlohmann::json& point : expandSweep(params ? *params : nlohmann::json::object())) {
         // Validate every point now, so a bad value fails before hours of work.
@@ -171,11 +185,13 @@ ExperimentConfig parseExperimentConfig(const nlohmann::json& json, const std::st
       }
     }
   } else {
-    for (const std::string& name : builtinMethods().names()) experiment.variants.push_back({name, nlohmann::json::object(), name});
+    for (const std::string& name : builtinMethods().names())
+      experiment.variants.push_back({name, nlohmann::json::object(), name});
   }
   std::set<std::string> labels;
   for (const MethodVariant& variant : experiment.variants) {
-    if (!labels.insert(variant.label).second) throwInputError("config methods: '{}' appears twice", variant.label);
+    if (!labels.insert(variant.label).second)
+      throwInputError("config methods: '{}' appears twice", variant.label);
   }
   if (config.has("views")) {
     ConfigObject views = config.child("views");

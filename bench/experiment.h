@@ -40,13 +40,14 @@ struct ExperimentConfig {
   std::vector<MethodVariant> variants;
   ViewSettings views;
   ForestSettings forests;
-  nlohmann::json raw;       // the config as read
-  std::string hash;         // of its canonical form
+  nlohmann::json raw;  // the config as read
+  std::string hash;    // of its canonical form
 };
 
 // Parses and validates a whole config; every unknown key or out-of-range value is an InputError
 // naming the key. `baseDirectory` resolves relative tree files (the config's folder).
-ExperimentConfig parseExperimentConfig(const nlohmann::json& json, const std::string& baseDirectory);
+ExperimentConfig parseExperimentConfig(const nlohmann::json& json,
+                                       const std::string& baseDirectory);
 ExperimentConfig readExperimentConfig(const std::string& path);
 
 // A list where a parameter takes one value is a sweep: the cartesian product of all lists, in

@@ -9,7 +9,8 @@
 
 namespace canopy {
 
-Harness::Harness(gl::Device& device, RenderSettings settings) : mDevice(device), mSettings(settings) {
+Harness::Harness(gl::Device& device, RenderSettings settings)
+    : mDevice(device), mSettings(settings) {
   mSettings.lightDirection = glm::normalize(mSettings.lightDirection);
 }
 
@@ -26,7 +27,8 @@ void Harness::uploadInstances(const std::vector<Instance>& instances) {
   if (mInstances.id() != 0 && instances.size() == mUploadedInstances.size() &&
       std::equal(instances.begin(), instances.end(), mUploadedInstances.begin(),
                  [](const Instance& a, const Instance& b) {
-                   return a.position == b.position && a.rotation == b.rotation && a.scale == b.scale;
+                   return a.position == b.position && a.rotation == b.rotation &&
+                          a.scale == b.scale;
                  })) {
     return;
   }
@@ -34,11 +36,13 @@ void Harness::uploadInstances(const std::vector<Instance>& instances) {
   matrices.reserve(instances.size());
   for (const Instance& instance : instances) matrices.push_back(instance.modelMatrix());
   gl::Device::OwnerScope owner(mDevice, "harness");
-  mInstances = mDevice.createBuffer(gl::MemoryCategory::kOther, GL_ARRAY_BUFFER, matrices, "instance matrices");
+  mInstances = mDevice.createBuffer(gl::MemoryCategory::kOther, GL_ARRAY_BUFFER, matrices,
+                                    "instance matrices");
   mUploadedInstances = instances;
 }
 
-FrameContext Harness::makeFrame(const Camera& camera, int width, int height, GLuint instances) const {
+FrameContext Harness::makeFrame(const Camera& camera, int width, int height,
+                                GLuint instances) const {
   FrameContext frame;
   frame.view = camera.view();
   frame.projection = camera.projection(float(width) / float(height));
@@ -72,7 +76,8 @@ ImageRgbaF Harness::renderLinear(Method& method, const Camera& camera) {
   gl::RenderTarget& target = targetOfSize(mSettings.width * s, mSettings.height * s);
   uploadInstances({Instance{}});
   beginFrame(target);
-  method.draw(makeFrame(camera, target.width, target.height, mInstances.id()), std::span(mUploadedInstances));
+  method.draw(makeFrame(camera, target.width, target.height, mInstances.id()),
+              std::span(mUploadedInstances));
   const gl::Api& g = gl::api();
   ImageRgbaF full(target.width, target.height);
   g.BindFramebuffer(GL_FRAMEBUFFER, target.framebuffer.id());
@@ -86,7 +91,8 @@ ImageRgbaF Harness::renderLinear(Method& method, const Camera& camera) {
 }
 
 ImageRgba8 Harness::render(Method& method, const Camera& camera) {
-  const glm::vec3 background(srgbToLinear(mSettings.background.r), srgbToLinear(mSettings.background.g),
+  const glm::vec3 background(srgbToLinear(mSettings.background.r),
+                             srgbToLinear(mSettings.background.g),
                              srgbToLinear(mSettings.background.b));
   return compositeToSrgb8(renderLinear(method, camera), background);
 }
@@ -97,15 +103,17 @@ FrameTimes summarizeFrameTimes(std::vector<double> milliseconds) {
   if (milliseconds.empty()) return times;
   std::sort(milliseconds.begin(), milliseconds.end());
   const size_t n = milliseconds.size();
-  times.medianMs = n % 2 ? milliseconds[n / 2] : 0.5 * (milliseconds[n / 2 - 1] + milliseconds[n / 2]);
+  times.medianMs =
+      n % 2 ? milliseconds[n / 2] : 0.5 * (milliseconds[n / 2 - 1] + milliseconds[n / 2]);
   const size_t rank = static_cast<size_t>(std::ceil(0.95 * double(n)));
   times.p95Ms = milliseconds[std::clamp<size_t>(rank, 1, n) - 1];
   times.meanMs = std::accumulate(milliseconds.begin(), milliseconds.end(), 0.0) / double(n);
   return times;
 }
 
-FrameTimes Harness::timeForest(Method& method, const std::vector<Instance>& forest, const Aabb& treeBounds,
-                               int frames, int warmup, int width, int height) {
+FrameTimes Harness::timeForest(Method& method, const std::vector<Instance>& forest,
+                               const Aabb& treeBounds, int frames, int warmup, int width,
+                               int height) {
   gl::RenderTarget& target = targetOfSize(width, height);
   uploadInstances(forest);
   const gl::Api& g = gl::api();
@@ -113,13 +121,15 @@ FrameTimes Harness::timeForest(Method& method, const std::vector<Instance>& fore
   g.Finish();
   for (int i = 0; i < warmup + frames; ++i) {
     const int pathFrame = i < warmup ? i : i - warmup;
-    const Camera camera = forestCamera(forest, treeBounds, pathFrame, frames, mSettings.fovYDegrees);
+    const Camera camera =
+        forestCamera(forest, treeBounds, pathFrame, frames, mSettings.fovYDegrees);
     const auto start = std::chrono::steady_clock::now();
     beginFrame(target);
     method.draw(makeFrame(camera, width, height, mInstances.id()), std::span(mUploadedInstances));
     g.Finish();
     const auto end = std::chrono::steady_clock::now();
-    if (i >= warmup) times.push_back(std::chrono::duration<double, std::milli>(end - start).count());
+    if (i >= warmup)
+      times.push_back(std::chrono::duration<double, std::milli>(end - start).count());
   }
   g.BindFramebuffer(GL_FRAMEBUFFER, 0);
   gl::checkError("Harness::timeForest");
@@ -127,7 +137,8 @@ FrameTimes Harness::timeForest(Method& method, const std::vector<Instance>& fore
 }
 
 ImageRgba8 Harness::renderForestFrame(Method& method, const std::vector<Instance>& forest,
-                                      const Aabb& treeBounds, int frame, int frames, int width, int height) {
+                                      const Aabb& treeBounds, int frame, int frames, int width,
+                                      int height) {
   gl::RenderTarget& target = targetOfSize(width, height);
   uploadInstances(forest);
   const Camera camera = forestCamera(forest, treeBounds, frame, frames, mSettings.fovYDegrees);
@@ -138,7 +149,8 @@ ImageRgba8 Harness::renderForestFrame(Method& method, const std::vector<Instance
   g.ReadPixels(0, 0, width, height, GL_RGBA, GL_FLOAT, image.pixels.data());
   g.BindFramebuffer(GL_FRAMEBUFFER, 0);
   flipRows(image);
-  const glm::vec3 background(srgbToLinear(mSettings.background.r), srgbToLinear(mSettings.background.g),
+  const glm::vec3 background(srgbToLinear(mSettings.background.r),
+                             srgbToLinear(mSettings.background.g),
                              srgbToLinear(mSettings.background.b));
   return compositeToSrgb8(image, background);
 }

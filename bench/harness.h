@@ -13,13 +13,13 @@ namespace canopy {
 
 // How every image is made, for the reference and every method alike.
 struct RenderSettings {
-  int width = 512;               // evaluation resolution
+  int width = 512;  // evaluation resolution
   int height = 512;
-  int supersample = 2;           // rendered at width·s × height·s, box-filtered down
-  float fovYDegrees = 40.0f;     // vertical field of view
+  int supersample = 2;        // rendered at width·s × height·s, box-filtered down
+  float fovYDegrees = 40.0f;  // vertical field of view
   Shading shading = Shading::kUnlit;
-  glm::vec3 background{0.5f, 0.6f, 0.75f};      // sRGB, the colour images are composited over
-  glm::vec3 lightDirection{0.3f, 0.8f, 0.5f};   // towards the light (normalised on use)
+  glm::vec3 background{0.5f, 0.6f, 0.75f};     // sRGB, the colour images are composited over
+  glm::vec3 lightDirection{0.3f, 0.8f, 0.5f};  // towards the light (normalised on use)
   float ambient = 0.35f;
 };
 
@@ -50,7 +50,8 @@ class Harness {
 
   // A frame of a forest as an image (for checks and figures).
   ImageRgba8 renderForestFrame(Method& method, const std::vector<Instance>& forest,
-                               const Aabb& treeBounds, int frame, int frames, int width, int height);
+                               const Aabb& treeBounds, int frame, int frames, int width,
+                               int height);
 
  private:
   FrameContext makeFrame(const Camera& camera, int width, int height, GLuint instances) const;

@@ -3,13 +3,15 @@
 #include <cstdio>
 #include <filesystem>
 
-#include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
 
 #include "bench/experiment.h"
 #include "bench/runner.h"
 #include "common/error.h"
 #include "common/progress.h"
+#include "common/tree_export.h"
+#include "common/tree_source.h"
 #include "methods/method.h"
 
 int main(int argc, char** argv) {
@@ -24,6 +26,16 @@ int main(int argc, char** argv) {
   app.add_flag("--quiet", quiet, "no progress bars and no info logs");
   app.add_flag("--no-images", noImages, "do not write rendered views as PNG");
   app.add_flag("--list-methods", listMethods, "print the registered methods and exit");
+  // canopy-bench export-tree --preset broadleaf --seed 1 [--leaves N] --out DIR
+  CLI::App* exportTree =
+      app.add_subcommand("export-tree", "write a built-in tree as OBJ + MTL + PNG");
+  std::string exportPreset = "broadleaf", exportOut;
+  int64_t exportSeed = 1;
+  int exportLeaves = 0;
+  exportTree->add_option("--preset", exportPreset, "broadleaf | shrub | sparse");
+  exportTree->add_option("--seed", exportSeed, "L-system seed");
+  exportTree->add_option("--leaves", exportLeaves, "leaf count (0: the preset's)");
+  exportTree->add_option("--out", exportOut, "output folder")->required();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
@@ -35,7 +47,19 @@ int main(int argc, char** argv) {
       for (const std::string& name : builtinMethods().names()) std::printf("%s\n", name.c_str());
       return kExitOk;
     }
-    if (configPath.empty()) throwInputError("--config: required (e.g. --config configs/default.json)");
+    if (*exportTree) {
+      TreeSpec spec;
+      spec.preset = exportPreset;
+      if (exportSeed < 0) throwInputError("--seed: must be >= 0");
+      spec.seed = static_cast<uint64_t>(exportSeed);
+      spec.leaves = exportLeaves;
+      if (exportLeaves < 0) throwInputError("--leaves: must be >= 0");
+      const Tree tree = loadTree(spec);
+      std::printf("%s\n", exportTreeObj(tree, exportOut).string().c_str());
+      return kExitOk;
+    }
+    if (configPath.empty())
+      throwInputError("--config: required (e.g. --config configs/default.json)");
     if (quiet) {
       spdlog::set_level(spdlog::level::warn);
       ProgressBar::setEnabled(false);

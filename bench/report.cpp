@@ -35,28 +35,34 @@ std::string number(double value, int decimals) {
   return std::isfinite(value) ? fmt::format("{:.{}f}", value, decimals) : "";
 }
 
-double mb(const nlohmann::json& bytes) { return bytes.is_number() ? bytes.get<double>() / 1e6 : std::nan(""); }
+double mb(const nlohmann::json& bytes) {
+  return bytes.is_number() ? bytes.get<double>() / 1e6 : std::nan("");
+}
 
 template <typename Rows, typename Get>
 std::vector<double> collectKeys(const Rows& rows, Get get) {
   std::set<double> keys;
-  for (const auto& row : rows) for (const auto& [key, value] : get(row)) keys.insert(key);
+  for (const auto& row : rows)
+    for (const auto& [key, value] : get(row)) keys.insert(key);
   return {keys.begin(), keys.end()};
 }
 
 double lookup(const std::vector<std::pair<double, double>>& pairs, double key) {
-  for (const auto& [k, v] : pairs) if (k == key) return v;
+  for (const auto& [k, v] : pairs)
+    if (k == key) return v;
   return std::nan("");
 }
 
 const nlohmann::json* forestOfSize(const SummaryRow& row, int size) {
-  for (const nlohmann::json& f : row.forests) if (f.value("trees", 0) == size) return &f;
+  for (const nlohmann::json& f : row.forests)
+    if (f.value("trees", 0) == size) return &f;
   return nullptr;
 }
 
 std::vector<int> forestSizes(const std::vector<SummaryRow>& rows) {
   std::set<int> sizes;
-  for (const SummaryRow& row : rows) for (const auto& f : row.forests) sizes.insert(f.value("trees", 0));
+  for (const SummaryRow& row : rows)
+    for (const auto& f : row.forests) sizes.insert(f.value("trees", 0));
   return {sizes.begin(), sizes.end()};
 }
 
@@ -78,10 +84,16 @@ std::vector<SummaryRow> summarize(const std::vector<nlohmann::json>& records) {
   for (const nlohmann::json& record : records) {
     const std::string kind = record.value("kind", "");
     if (kind == "tree") continue;
-    const std::string tree = record.value("tree", ""), variant = record.value("variant", record.value("method", ""));
+    const std::string tree = record.value("tree", ""),
+                      variant = record.value("variant", record.value("method", ""));
     auto [it, inserted] = index.try_emplace({tree, variant}, rows.size());
     if (inserted) {
-      rows.push_back({tree, record.value("method", ""), variant, record.value("params", nlohmann::json::object())});
+      SummaryRow row;
+      row.tree = tree;
+      row.method = record.value("method", "");
+      row.variant = variant;
+      row.params = record.value("params", nlohmann::json::object());
+      rows.push_back(std::move(row));
       accumulators.emplace_back();
     }
     SummaryRow& row = rows[it->second];
@@ -109,8 +121,9 @@ std::vector<SummaryRow> summarize(const std::vector<nlohmann::json>& records) {
     rows[i].coverageError = acc.coverage.value();
     for (const auto& [d, m] : acc.byDistance) rows[i].psnrByDistance.emplace_back(d, m.value());
     for (const auto& [e, m] : acc.byElevation) rows[i].psnrByElevation.emplace_back(e, m.value());
-    std::sort(rows[i].forests.begin(), rows[i].forests.end(),
-              [](const auto& a, const auto& b) { return a.value("trees", 0) < b.value("trees", 0); });
+    std::sort(rows[i].forests.begin(), rows[i].forests.end(), [](const auto& a, const auto& b) {
+      return a.value("trees", 0) < b.value("trees", 0);
+    });
   }
   return rows;
 }
@@ -119,30 +132,43 @@ std::string formatSummaryCsv(const std::vector<SummaryRow>& rows) {
   const auto distances = collectKeys(rows, [](const SummaryRow& r) { return r.psnrByDistance; });
   const auto elevations = collectKeys(rows, [](const SummaryRow& r) { return r.psnrByElevation; });
   const auto sizes = forestSizes(rows);
-  std::string out = "tree,method,variant,params,bake_s,bake_peak_rss_mb,memory_texture_mb,memory_geometry_mb,"
-                    "memory_other_mb,memory_total_mb,disk_mb,views,psnr,psnr_frame,ssim,coverage_error";
+  std::string out =
+      "tree,method,variant,params,bake_s,bake_peak_rss_mb,memory_texture_mb,memory_geometry_mb,"
+      "memory_other_mb,memory_total_mb,disk_mb,views,psnr,psnr_frame,ssim,coverage_error";
   for (double d : distances) out += fmt::format(",psnr_d{:g}", d);
   for (double e : elevations) out += fmt::format(",psnr_e{:g}", e);
-  for (int n : sizes) out += fmt::format(",frame_ms_median_n{0},frame_ms_p95_n{0},fps_n{0},speedup_vs_polygonal_n{0}", n);
+  for (int n : sizes)
+    out += fmt::format(",frame_ms_median_n{0},frame_ms_p95_n{0},fps_n{0},speedup_vs_polygonal_n{0}",
+                       n);
   out += "\n";
   for (const SummaryRow& row : rows) {
     const nlohmann::json& bake = row.bake;
-    const nlohmann::json memory = bake.is_object() ? bake.value("memory_bytes", nlohmann::json()) : nlohmann::json();
-    const auto memoryField = [&](const char* key) { return memory.is_object() ? mb(memory[key]) : std::nan(""); };
-    out += csvField(row.tree) + "," + csvField(row.method) + "," + csvField(row.variant) + "," + csvField(row.params.dump());
+    const nlohmann::json memory =
+        bake.is_object() ? bake.value("memory_bytes", nlohmann::json()) : nlohmann::json();
+    const auto memoryField = [&](const char* key) {
+      return memory.is_object() ? mb(memory[key]) : std::nan("");
+    };
+    out += csvField(row.tree) + "," + csvField(row.method) + "," + csvField(row.variant) + "," +
+           csvField(row.params.dump());
     out += "," + number(jsonNumber(bake.is_object() ? &bake : nullptr, "bake_s"), 4);
-    out += "," + number(bake.is_object() ? mb(bake.value("bake_peak_rss_bytes", nlohmann::json())) : std::nan(""), 2);
-    for (const char* key : {"texture", "geometry", "other", "total"}) out += "," + number(memoryField(key), 4);
-    out += "," + number(bake.is_object() ? mb(bake.value("disk_bytes", nlohmann::json())) : std::nan(""), 4);
+    out += "," + number(bake.is_object() ? mb(bake.value("bake_peak_rss_bytes", nlohmann::json()))
+                                         : std::nan(""),
+                        2);
+    for (const char* key : {"texture", "geometry", "other", "total"})
+      out += "," + number(memoryField(key), 4);
+    out +=
+        "," +
+        number(bake.is_object() ? mb(bake.value("disk_bytes", nlohmann::json())) : std::nan(""), 4);
     out += fmt::format(",{}", row.views);
-    out += "," + number(row.psnr, 3) + "," + number(row.psnrFrame, 3) + "," + number(row.ssim, 4) + "," +
-           number(row.coverageError, 5);
+    out += "," + number(row.psnr, 3) + "," + number(row.psnrFrame, 3) + "," + number(row.ssim, 4) +
+           "," + number(row.coverageError, 5);
     for (double d : distances) out += "," + number(lookup(row.psnrByDistance, d), 3);
     for (double e : elevations) out += "," + number(lookup(row.psnrByElevation, e), 3);
     for (int n : sizes) {
       const nlohmann::json* f = forestOfSize(row, n);
-      out += "," + number(jsonNumber(f, "frame_ms_median"), 3) + "," + number(jsonNumber(f, "frame_ms_p95"), 3) + "," +
-             number(jsonNumber(f, "fps"), 3) + "," + number(jsonNumber(f, "speedup_vs_polygonal"), 3);
+      out += "," + number(jsonNumber(f, "frame_ms_median"), 3) + "," +
+             number(jsonNumber(f, "frame_ms_p95"), 3) + "," + number(jsonNumber(f, "fps"), 3) +
+             "," + number(jsonNumber(f, "speedup_vs_polygonal"), 3);
     }
     out += "\n";
   }
@@ -154,21 +180,25 @@ std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std
   const auto distances = collectKeys(rows, [](const SummaryRow& r) { return r.psnrByDistance; });
   const auto elevations = collectKeys(rows, [](const SummaryRow& r) { return r.psnrByElevation; });
   const auto sizes = forestSizes(rows);
-  std::string out = fmt::format("# {}\n\nRenderer: `{}`. PSNR in dB over the union of coverage masks "
-                                "(capped at 100 dB for identical images); memory from the GPU ledger.\n\n",
-                                title, renderer);
-  out += "## Quality, memory and bake\n\n| tree | method | bake s | memory MB | disk MB | PSNR | SSIM | coverage err |";
+  std::string out = fmt::format(
+      "# {}\n\nRenderer: `{}`. PSNR in dB over the union of coverage masks "
+      "(capped at 100 dB for identical images); memory from the GPU ledger.\n\n",
+      title, renderer);
+  out +=
+      "## Quality, memory and bake\n\n| tree | method | bake s | memory MB | disk MB | PSNR | SSIM "
+      "| coverage err |";
   for (double d : distances) out += fmt::format(" PSNR @{:g}r |", d);
   out += "\n|---|---|--:|--:|--:|--:|--:|--:|";
   for (size_t i = 0; i < distances.size(); ++i) out += "--:|";
   out += "\n";
   for (const SummaryRow& row : rows) {
     const nlohmann::json* bake = row.bake.is_object() ? &row.bake : nullptr;
-    const double memory = bake ? mb((*bake)["memory_bytes"].value("total", nlohmann::json())) : std::nan("");
+    const double memory =
+        bake ? mb((*bake)["memory_bytes"].value("total", nlohmann::json())) : std::nan("");
     out += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} |", row.tree, row.variant,
                        number(jsonNumber(bake, "bake_s"), 2), number(memory, 2),
-                       number(bake ? mb((*bake)["disk_bytes"]) : std::nan(""), 2), number(row.psnr, 2),
-                       number(row.ssim, 3), number(row.coverageError, 4));
+                       number(bake ? mb((*bake)["disk_bytes"]) : std::nan(""), 2),
+                       number(row.psnr, 2), number(row.ssim, 3), number(row.coverageError, 4));
     for (double d : distances) out += " " + number(lookup(row.psnrByDistance, d), 2) + " |";
     out += "\n";
   }
@@ -185,7 +215,9 @@ std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std
     }
   }
   if (!sizes.empty()) {
-    out += "\n## Frame time by forest size (median ms / FPS / speedup vs polygonal, same run)\n\n| tree | method |";
+    out +=
+        "\n## Frame time by forest size (median ms / FPS / speedup vs polygonal, same run)\n\n| "
+        "tree | method |";
     for (int n : sizes) out += fmt::format(" {} trees |", n);
     out += "\n|---|---|";
     for (size_t i = 0; i < sizes.size(); ++i) out += "--:|";
@@ -195,7 +227,8 @@ std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std
       for (int n : sizes) {
         const nlohmann::json* f = forestOfSize(row, n);
         out += f ? fmt::format(" {} / {} / {}× |", number(jsonNumber(f, "frame_ms_median"), 1),
-                               number(jsonNumber(f, "fps"), 1), number(jsonNumber(f, "speedup_vs_polygonal"), 2))
+                               number(jsonNumber(f, "fps"), 1),
+                               number(jsonNumber(f, "speedup_vs_polygonal"), 2))
                  : " |";
       }
       out += "\n";
@@ -204,8 +237,9 @@ std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std
   return out;
 }
 
-void writeSummaries(const std::filesystem::path& directory, const std::vector<nlohmann::json>& records,
-                    const std::string& title, const std::string& renderer) {
+void writeSummaries(const std::filesystem::path& directory,
+                    const std::vector<nlohmann::json>& records, const std::string& title,
+                    const std::string& renderer) {
   const auto rows = summarize(records);
   writeTextAtomically(directory / "summary.csv", formatSummaryCsv(rows));
   writeTextAtomically(directory / "summary.md", formatSummaryMarkdown(rows, title, renderer));

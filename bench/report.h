@@ -29,7 +29,8 @@ std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std
                                   const std::string& renderer);
 
 // Writes summary.csv and summary.md into `directory` atomically.
-void writeSummaries(const std::filesystem::path& directory, const std::vector<nlohmann::json>& records,
-                    const std::string& title, const std::string& renderer);
+void writeSummaries(const std::filesystem::path& directory,
+                    const std::vector<nlohmann::json>& records, const std::string& title,
+                    const std::string& renderer);
 
 }  // namespace canopy

@@ -25,7 +25,8 @@ std::vector<nlohmann::json> ResultsStore::readRecords(const std::filesystem::pat
     try {
       records.push_back(nlohmann::json::parse(line));
     } catch (const nlohmann::json::parse_error& error) {
-      throwInputError("{}: line {} is not a JSON record ({})", path.string(), records.size() + 1, error.what());
+      throwInputError("{}: line {} is not a JSON record ({})", path.string(), records.size() + 1,
+                      error.what());
     }
   }
   return records;
@@ -42,8 +43,8 @@ ResultsStore::ResultsStore(std::filesystem::path directory) : mDirectory(std::mo
     const size_t lastNewline = text.rfind('\n');
     const size_t whole = lastNewline == std::string::npos ? 0 : lastNewline + 1;
     if (whole != text.size()) {
-      spdlog::warn("{}: dropping a torn last record ({} bytes) left by an interrupted run", path.string(),
-                   text.size() - whole);
+      spdlog::warn("{}: dropping a torn last record ({} bytes) left by an interrupted run",
+                   path.string(), text.size() - whole);
       std::filesystem::resize_file(path, whole);
     }
   }

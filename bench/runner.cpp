@@ -40,10 +40,11 @@ struct BakedMethod {
 };
 
 // Bakes and uploads one method under its own ledger owner and measures what the record needs.
-BakedMethod bakeMethod(const MethodVariant& variant, const Tree& tree, gl::Device& device, uint64_t seed,
-                       const std::filesystem::path& assetFolder, bool saveAsset) {
+BakedMethod bakeMethod(const MethodVariant& variant, const Tree& tree, gl::Device& device,
+                       uint64_t seed, const std::filesystem::path& assetFolder, bool saveAsset) {
   BakedMethod baked;
-  baked.method = builtinMethods().find(variant.method).create(variant.params, "methods." + variant.label);
+  baked.method =
+      builtinMethods().find(variant.method).create(variant.params, "methods." + variant.label);
   const bool peakReset = resetPeakRss();
   BakeContext context;
   context.seed = seed;
@@ -106,10 +107,11 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
                          {"config_hash", config.hash},
                          {"git_commit", gitCommit()},
                          {"canopy_version", CANOPY_VERSION},
-                         {"gl", {{"backend", gl::backendName(options.backend)},
-                                 {"renderer", renderer},
-                                 {"version", context->version()},
-                                 {"vendor", context->vendor()}}},
+                         {"gl",
+                          {{"backend", gl::backendName(options.backend)},
+                           {"renderer", renderer},
+                           {"version", context->version()},
+                           {"vendor", context->vendor()}}},
                          {"cpu", cpuModel()},
                          {"seed", config.seed},
                          {"shard", fmt::format("{}/{}", options.shardIndex, options.shardCount)},
@@ -130,39 +132,50 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
     const TreeSpec& spec = config.trees[t];
     std::vector<size_t> mine;
     for (size_t v = 0; v < config.variants.size(); ++v) {
-      if ((t * config.variants.size() + v) % size_t(options.shardCount) == size_t(options.shardIndex)) mine.push_back(v);
+      if ((t * config.variants.size() + v) % size_t(options.shardCount) ==
+          size_t(options.shardIndex))
+        mine.push_back(v);
     }
     if (mine.empty()) continue;
     const std::string treeLabel = spec.label();
     const auto loadStart = Clock::now();
     const Tree tree = loadTree(spec);
     const double loadSeconds = secondsSince(loadStart);
-    spdlog::info("tree {}: {} leaves, {} wood triangles, loaded in {:.2f} s", treeLabel, tree.leaves.size(),
-                 tree.wood.triangleCount(), loadSeconds);
+    spdlog::info("tree {}: {} leaves, {} wood triangles, loaded in {:.2f} s", treeLabel,
+                 tree.leaves.size(), tree.wood.triangleCount(), loadSeconds);
     const std::string treeKey = "tree|" + treeLabel;
     if (!store.has(treeKey)) {
-      store.append({{"kind", "tree"}, {"tree", treeLabel}, {"source", spec.source()},
-                    {"leaves", tree.leaves.size()}, {"wood_triangles", tree.wood.triangleCount()},
-                    {"branch_nodes", tree.branches.size()}, {"bounding_radius", tree.boundingSphereRadius()},
+      store.append({{"kind", "tree"},
+                    {"tree", treeLabel},
+                    {"source", spec.source()},
+                    {"leaves", tree.leaves.size()},
+                    {"wood_triangles", tree.wood.triangleCount()},
+                    {"branch_nodes", tree.branches.size()},
+                    {"bounding_radius", tree.boundingSphereRadius()},
                     {"load_s", loadSeconds}},
                    treeKey);
     }
-    const auto forest = [&](int size) { return layoutForest(size, tree.boundingSphereRadius(), config.seed); };
+    const auto forest = [&](int size) {
+      return layoutForest(size, tree.boundingSphereRadius(), config.seed);
+    };
 
     // The reference, baked once per tree; its images and forest times are made on first need.
     std::optional<BakedMethod> reference;
     std::map<std::string, ImageRgba8> referenceImages;
     std::map<int, FrameTimes> referenceTimes;
     const auto ensureReference = [&] {
-      if (!reference) reference = bakeMethod(referenceVariant, tree, device, config.seed, {}, false);
+      if (!reference)
+        reference = bakeMethod(referenceVariant, tree, device, config.seed, {}, false);
     };
     const auto referenceImage = [&](const ViewPose& pose) -> const ImageRgba8& {
       ensureReference();
       auto [it, inserted] = referenceImages.try_emplace(viewKey(pose));
       if (inserted) {
-        it->second = harness.render(*reference->method, orbitCamera(tree.bounds, pose, config.views.render.fovYDegrees));
+        it->second = harness.render(
+            *reference->method, orbitCamera(tree.bounds, pose, config.views.render.fovYDegrees));
         if (options.saveImages) {
-          writePng(options.outDirectory / "images" / safeName(treeLabel) / "reference" / (viewKey(pose) + ".png"),
+          writePng(options.outDirectory / "images" / safeName(treeLabel) / "reference" /
+                       (viewKey(pose) + ".png"),
                    withOpaqueAlpha(it->second));
         }
       }
@@ -172,8 +185,9 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
       ensureReference();
       auto [it, inserted] = referenceTimes.try_emplace(size);
       if (inserted) {
-        it->second = harness.timeForest(*reference->method, forest(size), tree.bounds, config.forests.frames,
-                                        config.forests.warmup, config.forests.width, config.forests.height);
+        it->second =
+            harness.timeForest(*reference->method, forest(size), tree.bounds, config.forests.frames,
+                               config.forests.warmup, config.forests.width, config.forests.height);
       }
       return it->second;
     };
@@ -182,22 +196,27 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
       const MethodVariant& variant = config.variants[v];
       const std::string prefix = treeLabel + "|" + variant.label + "|";
       std::vector<ViewPose> pendingViews;
-      for (const ViewPose& pose : poses) if (!store.has(prefix + "view|" + viewKey(pose))) pendingViews.push_back(pose);
+      for (const ViewPose& pose : poses)
+        if (!store.has(prefix + "view|" + viewKey(pose))) pendingViews.push_back(pose);
       std::vector<int> pendingForests;
-      for (int size : config.forests.sizes) if (!store.has(prefix + fmt::format("forest|{}", size))) pendingForests.push_back(size);
+      for (int size : config.forests.sizes)
+        if (!store.has(prefix + fmt::format("forest|{}", size))) pendingForests.push_back(size);
       const bool bakeDone = store.has(prefix + "bake");
       if (bakeDone && pendingViews.empty() && pendingForests.empty()) {
         spdlog::info("{} on {}: already complete, skipped", variant.label, treeLabel);
         continue;
       }
-      const nlohmann::json common = {{"tree", treeLabel}, {"method", variant.method}, {"variant", variant.label}};
+      const nlohmann::json common = {
+          {"tree", treeLabel}, {"method", variant.method}, {"variant", variant.label}};
       spdlog::info("{} on {}: baking", variant.label, treeLabel);
-      BakedMethod baked = bakeMethod(variant, tree, device, config.seed,
-                                     options.outDirectory / "assets" / safeName(treeLabel) / safeName(variant.label),
-                                     options.saveAssets);
+      BakedMethod baked = bakeMethod(
+          variant, tree, device, config.seed,
+          options.outDirectory / "assets" / safeName(treeLabel) / safeName(variant.label),
+          options.saveAssets);
       const nlohmann::json params = baked.record["params"];
       spdlog::info("{} on {}: bake {:.2f} s, {:.2f} MB on the GPU", variant.label, treeLabel,
-                   baked.record["bake_s"].get<double>(), baked.record["memory_bytes"]["total"].get<double>() / 1e6);
+                   baked.record["bake_s"].get<double>(),
+                   baked.record["memory_bytes"]["total"].get<double>() / 1e6);
       if (!bakeDone) {
         nlohmann::json record = common;
         record.update(baked.record);
@@ -205,41 +224,59 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
         store.append(record, prefix + "bake");
       }
       {
-        ProgressBar progress(fmt::format("{} {} views", treeLabel, variant.label), pendingViews.size());
+        ProgressBar progress(fmt::format("{} {} views", treeLabel, variant.label),
+                             pendingViews.size());
         for (const ViewPose& pose : pendingViews) {
           const ImageRgba8& expected = referenceImage(pose);
-          const ImageRgba8 image = harness.render(*baked.method, orbitCamera(tree.bounds, pose, config.views.render.fovYDegrees));
+          const ImageRgba8 image = harness.render(
+              *baked.method, orbitCamera(tree.bounds, pose, config.views.render.fovYDegrees));
           const ImageMetrics metrics = compareImages(expected, image);
           if (options.saveImages) {
-            writePng(options.outDirectory / "images" / safeName(treeLabel) / safeName(variant.label) / (viewKey(pose) + ".png"),
+            writePng(options.outDirectory / "images" / safeName(treeLabel) /
+                         safeName(variant.label) / (viewKey(pose) + ".png"),
                      withOpaqueAlpha(image));
           }
           nlohmann::json record = common;
-          record.update({{"kind", "view"}, {"params", params}, {"distance", pose.distance},
-                         {"elevation", pose.elevation}, {"azimuth", pose.azimuth}, {"psnr", metrics.psnr},
-                         {"psnr_frame", metrics.psnrFrame}, {"ssim", metrics.ssim},
-                         {"coverage_error", metrics.coverageError}, {"union_pixels", metrics.unionPixels},
-                         {"shading", config.views.render.shading == Shading::kLit ? "lit" : "unlit"}});
+          record.update(
+              {{"kind", "view"},
+               {"params", params},
+               {"distance", pose.distance},
+               {"elevation", pose.elevation},
+               {"azimuth", pose.azimuth},
+               {"psnr", metrics.psnr},
+               {"psnr_frame", metrics.psnrFrame},
+               {"ssim", metrics.ssim},
+               {"coverage_error", metrics.coverageError},
+               {"union_pixels", metrics.unionPixels},
+               {"shading", config.views.render.shading == Shading::kLit ? "lit" : "unlit"}});
           store.append(record, prefix + "view|" + viewKey(pose));
           progress.advance();
         }
       }
       {
-        ProgressBar progress(fmt::format("{} {} forests", treeLabel, variant.label), pendingForests.size());
+        ProgressBar progress(fmt::format("{} {} forests", treeLabel, variant.label),
+                             pendingForests.size());
         for (int size : pendingForests) {
-          // Reference first, then the method, back to back in this process: the ratio is from one run.
+          // Reference first, then the method, back to back in this process: the ratio is from one
+          // run.
           const bool isReference = variant.method == "polygonal" && variant.params.empty();
           const FrameTimes& polygonal = referenceTime(size);
-          const FrameTimes times = isReference ? polygonal
-                                               : harness.timeForest(*baked.method, forest(size), tree.bounds,
-                                                                    config.forests.frames, config.forests.warmup,
-                                                                    config.forests.width, config.forests.height);
+          const FrameTimes times =
+              isReference ? polygonal
+                          : harness.timeForest(*baked.method, forest(size), tree.bounds,
+                                               config.forests.frames, config.forests.warmup,
+                                               config.forests.width, config.forests.height);
           nlohmann::json record = common;
-          record.update({{"kind", "forest"}, {"params", params}, {"trees", size},
-                         {"frames", times.frames}, {"warmup", config.forests.warmup},
+          record.update({{"kind", "forest"},
+                         {"params", params},
+                         {"trees", size},
+                         {"frames", times.frames},
+                         {"warmup", config.forests.warmup},
                          {"resolution", {config.forests.width, config.forests.height}},
-                         {"frame_ms_median", times.medianMs}, {"frame_ms_p95", times.p95Ms},
-                         {"frame_ms_mean", times.meanMs}, {"fps", 1000.0 / times.medianMs},
+                         {"frame_ms_median", times.medianMs},
+                         {"frame_ms_p95", times.p95Ms},
+                         {"frame_ms_mean", times.meanMs},
+                         {"fps", 1000.0 / times.medianMs},
                          {"polygonal_frame_ms_median", polygonal.medianMs},
                          {"speedup_vs_polygonal", polygonal.medianMs / times.medianMs},
                          {"gl_renderer", renderer}});
@@ -251,8 +288,11 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
   }
   writeSummaries(options.outDirectory, store.records(), config.name, renderer);
   meta["finished"] = isoTimestampUtc();
-  runs.push_back({{"started", meta["started"]}, {"finished", meta["finished"]}, {"git_commit", meta["git_commit"]},
-                  {"gl_renderer", renderer}, {"shard", meta["shard"]}});
+  runs.push_back({{"started", meta["started"]},
+                  {"finished", meta["finished"]},
+                  {"git_commit", meta["git_commit"]},
+                  {"gl_renderer", renderer},
+                  {"shard", meta["shard"]}});
   meta["runs"] = runs;
   writeTextAtomically(metaPath, meta.dump(2));
   spdlog::info("{}: results in {}", config.name, options.outDirectory.string());

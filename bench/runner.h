@@ -9,12 +9,12 @@
 namespace canopy {
 
 struct RunOptions {
-  std::filesystem::path outDirectory;    // results/<name> unless --out
+  std::filesystem::path outDirectory;  // results/<name> unless --out
   gl::Backend backend = gl::Backend::kOsMesa;
-  int shardIndex = 0;                    // --shard I/N: units u with u % N == I
+  int shardIndex = 0;  // --shard I/N: units u with u % N == I
   int shardCount = 1;
-  bool saveImages = true;                // rendered views as PNG under images/
-  bool saveAssets = true;                // baked assets under assets/ (their size is disk_bytes)
+  bool saveImages = true;  // rendered views as PNG under images/
+  bool saveAssets = true;  // baked assets under assets/ (their size is disk_bytes)
 };
 
 // Runs a whole experiment: loads trees, bakes every method variant, renders and scores every

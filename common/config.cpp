@@ -7,7 +7,8 @@ namespace canopy {
 
 ConfigObject::ConfigObject(const nlohmann::json& json, std::string path)
     : mJson(json), mPath(std::move(path)) {
-  if (!mJson.is_object()) throwInputError("config {}: expected a JSON object", mPath.empty() ? "(top)" : mPath);
+  if (!mJson.is_object())
+    throwInputError("config {}: expected a JSON object", mPath.empty() ? "(top)" : mPath);
 }
 
 std::string ConfigObject::keyPath(const std::string& key) const {

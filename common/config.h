@@ -77,15 +77,16 @@ nlohmann::json readJsonFile(const std::string& path);
 // writes them back as the effective parameters, so reading and reporting cannot drift apart.
 class ParamReader {
  public:
-  ParamReader(ConfigObject& config, std::string owner) : mConfig(config), mOwner(std::move(owner)) {}
+  ParamReader(ConfigObject& config, std::string owner)
+      : mConfig(config), mOwner(std::move(owner)) {}
 
   template <typename T>
   void operator()(const char* key, T& field, T lo, T hi) {
     if (!mConfig.has(key)) return;
     const T value = mConfig.get<T>(key);
     if (!(value >= lo && value <= hi)) {
-      throwInputError("{}: parameter '{}' = {} is out of range [{}, {}]", mOwner, mConfig.keyPath(key),
-                      value, lo, hi);
+      throwInputError("{}: parameter '{}' = {} is out of range [{}, {}]", mOwner,
+                      mConfig.keyPath(key), value, lo, hi);
     }
     field = value;
   }
@@ -96,8 +97,8 @@ class ParamReader {
     if (!mConfig.has(key)) return;
     const auto value = mConfig.get<std::string>(key);
     if (std::find(allowed.begin(), allowed.end(), value) == allowed.end()) {
-      throwInputError("{}: parameter '{}' = '{}' is not one of {}", mOwner, mConfig.keyPath(key), value,
-                      nlohmann::json(allowed).dump());
+      throwInputError("{}: parameter '{}' = '{}' is not one of {}", mOwner, mConfig.keyPath(key),
+                      value, nlohmann::json(allowed).dump());
     }
     field = value;
   }
@@ -110,7 +111,9 @@ class ParamReader {
 class ParamWriter {
  public:
   template <typename T>
-  void operator()(const char* key, const T& field, T, T) { mJson[key] = field; }
+  void operator()(const char* key, const T& field, T, T) {
+    mJson[key] = field;
+  }
   void operator()(const char* key, const bool& field) { mJson[key] = field; }
   void operator()(const char* key, const std::string& field, const std::vector<std::string>&) {
     mJson[key] = field;

@@ -146,7 +146,8 @@ ImageRgba8 withOpaqueAlpha(ImageRgba8 image) {
 void flipRows(ImageRgbaF& image) {
   const size_t rowFloats = size_t(image.width) * 4;
   for (int y = 0; y < image.height / 2; ++y) {
-    std::swap_ranges(image.pixels.begin() + y * rowFloats, image.pixels.begin() + (y + 1) * rowFloats,
+    std::swap_ranges(image.pixels.begin() + y * rowFloats,
+                     image.pixels.begin() + (y + 1) * rowFloats,
                      image.pixels.begin() + (image.height - 1 - y) * rowFloats);
   }
 }

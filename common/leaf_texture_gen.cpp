@@ -71,8 +71,8 @@ LeafTexture drawLeafTexture(int size, uint32_t variant) {
   texture.normalMap = ImageRgba8(size, size);
   const float texel = 1.0f / float(size);
   // Variants differ in hue and in the noise seed.
-  const glm::vec3 baseGreen = variant % 2 == 0 ? glm::vec3(0.20f, 0.42f, 0.10f)
-                                                : glm::vec3(0.28f, 0.45f, 0.08f);
+  const glm::vec3 baseGreen =
+      variant % 2 == 0 ? glm::vec3(0.20f, 0.42f, 0.10f) : glm::vec3(0.28f, 0.45f, 0.08f);
   std::vector<float> height(size_t(size) * size, 0.0f);
   for (int y = 0; y < size; ++y) {
     for (int x = 0; x < size; ++x) {
@@ -111,7 +111,8 @@ LeafTexture drawLeafTexture(int size, uint32_t variant) {
       const glm::vec3 n = glm::normalize(glm::vec3(-(h(x + 1, y) - h(x - 1, y)) * strength,
                                                    -(h(x, y + 1) - h(x, y - 1)) * strength, 1.0f));
       uint8_t* p = texture.normalMap.at(x, y);
-      for (int c = 0; c < 3; ++c) p[c] = static_cast<uint8_t>(std::lround((n[c] * 0.5f + 0.5f) * 255.0f));
+      for (int c = 0; c < 3; ++c)
+        p[c] = static_cast<uint8_t>(std::lround((n[c] * 0.5f + 0.5f) * 255.0f));
       p[3] = 255;
     }
   }

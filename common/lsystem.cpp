@@ -37,8 +37,8 @@ void rewriteApex(const Module& apex, const LSystemTreeParams& params, Random& ra
     for (int i = 0; i < laterals; ++i) {
       const float pitch = params.branchAngle + random.uniform(-1, 1) * params.angleJitter;
       out.push_back(makeModule('['));
-      out.push_back(makeModule('/', 360.0f * float(i) / float(laterals) +
-                                        random.uniform(-1, 1) * params.angleJitter));
+      out.push_back(makeModule(
+          '/', 360.0f * float(i) / float(laterals) + random.uniform(-1, 1) * params.angleJitter));
       out.push_back(makeModule('&', pitch));
       out.push_back(makeModule('A', length * params.lateralLengthRatio, radius * params.radiusRatio,
                                float(order + 1)));
@@ -157,7 +157,8 @@ Leaf makeLeaf(const Turtle& turtle, const Module& m, const LSystemTreeParams& pa
   // Leaves stand off the twig on petioles and short spurs, so foliage fills the crown volume.
   const glm::vec3 base =
       turtle.position - turtle.heading * m.p[3] + side * (params.leafSpread * random.uniform());
-  const glm::vec3 direction = glm::normalize(turtle.heading * std::cos(pitch) + side * std::sin(pitch));
+  const glm::vec3 direction =
+      glm::normalize(turtle.heading * std::cos(pitch) + side * std::sin(pitch));
   // The blade's width axis: horizontal where possible, twisted randomly by up to ±35°.
   glm::vec3 across = glm::cross(direction, glm::vec3(0.0f, 1.0f, 0.0f));
   if (glm::length(across) < 0.05f) across = side;
@@ -185,7 +186,9 @@ Leaf makeLeaf(const Turtle& turtle, const Module& m, const LSystemTreeParams& pa
 
 void validateParams(const LSystemTreeParams& params) {
   const auto require = [&](bool ok, const char* key, auto value) {
-    if (!ok) throwInputError("tree preset '{}': parameter '{}' out of range ({})", params.preset, key, value);
+    if (!ok)
+      throwInputError("tree preset '{}': parameter '{}' out of range ({})", params.preset, key,
+                      value);
   };
   require(params.iterations >= 1 && params.iterations <= 14, "iterations", params.iterations);
   require(params.leaves >= 1 && params.leaves <= 2'000'000, "leaves", params.leaves);
@@ -245,7 +248,9 @@ LSystemTreeParams treePreset(const std::string& name) {
   return params;
 }
 
-std::vector<std::string> treePresetNames() { return {"broadleaf", "shrub", "sparse"}; }
+std::vector<std::string> treePresetNames() {
+  return {"broadleaf", "shrub", "sparse"};
+}
 
 std::vector<Module> deriveTreeString(const LSystemTreeParams& params, uint64_t seed) {
   validateParams(params);
@@ -258,7 +263,8 @@ std::vector<Module> deriveTreeString(const LSystemTreeParams& params, uint64_t s
   } else {
     for (int s = 0; s < params.stems; ++s) {
       modules.push_back(makeModule('['));
-      modules.push_back(makeModule('/', 360.0f * float(s) / float(params.stems) + random.uniform(-15, 15)));
+      modules.push_back(
+          makeModule('/', 360.0f * float(s) / float(params.stems) + random.uniform(-15, 15)));
       modules.push_back(makeModule('&', params.stemSpread + random.uniform(-8, 8)));
       modules.push_back(makeModule('F', params.boleLength, params.trunkRadius, 0.0f));
       modules.push_back(makeModule('A', params.trunkLength, firstRadius, 0.0f));
@@ -306,9 +312,15 @@ Tree interpretTreeString(const std::vector<Module>& modules, const LSystemTreePa
         turtle.applyTropism(params.tropism);
         break;
       }
-      case '+': turtle.turn(m.p[0]); break;
-      case '&': turtle.pitch(m.p[0]); break;
-      case '/': turtle.roll(m.p[0]); break;
+      case '+':
+        turtle.turn(m.p[0]);
+        break;
+      case '&':
+        turtle.pitch(m.p[0]);
+        break;
+      case '/':
+        turtle.roll(m.p[0]);
+        break;
       case '[': {  // PUSH: save the turtle, open a new box one level deeper
         stack.push_back(turtle);
         BranchNode node;
@@ -320,16 +332,21 @@ Tree interpretTreeString(const std::vector<Module>& modules, const LSystemTreePa
         break;
       }
       case ']': {  // POP: close the last box, restore the turtle
-        if (stack.empty()) throwInputError("preset '{}': unbalanced POP in L-system string", params.preset);
+        if (stack.empty())
+          throwInputError("preset '{}': unbalanced POP in L-system string", params.preset);
         turtle = stack.back();
         stack.pop_back();
         break;
       }
-      case 'L': tree.leaves.push_back(makeLeaf(turtle, m, params, random)); break;
-      default: throwInputError("preset '{}': unknown module '{}'", params.preset, m.symbol);
+      case 'L':
+        tree.leaves.push_back(makeLeaf(turtle, m, params, random));
+        break;
+      default:
+        throwInputError("preset '{}': unknown module '{}'", params.preset, m.symbol);
     }
   }
-  if (!stack.empty()) throwInputError("preset '{}': unbalanced PUSH in L-system string", params.preset);
+  if (!stack.empty())
+    throwInputError("preset '{}': unbalanced PUSH in L-system string", params.preset);
   return tree;
 }
 

@@ -29,7 +29,8 @@ std::vector<double> gaussianBlur(const std::vector<double>& input, int width, in
   constexpr int kRadius = 5;
   constexpr double kSigma = 1.5;
   double weights[2 * kRadius + 1];
-  for (int i = -kRadius; i <= kRadius; ++i) weights[i + kRadius] = std::exp(-double(i * i) / (2 * kSigma * kSigma));
+  for (int i = -kRadius; i <= kRadius; ++i)
+    weights[i + kRadius] = std::exp(-double(i * i) / (2 * kSigma * kSigma));
   std::vector<double> temporary(input.size()), output(input.size());
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
@@ -68,7 +69,8 @@ double ssimLuma(const ImageRgba8& a, const ImageRgba8& b, int x0, int y0, int x1
   const int gx1 = std::min(a.width, x1 + 5), gy1 = std::min(a.height, y1 + 5);
   const int w = gx1 - gx0, h = gy1 - gy0;
   const std::vector<double> lumaA = lumaOf(a), lumaB = lumaOf(b);
-  std::vector<double> pa(size_t(w) * h), pb(pa.size()), paa(pa.size()), pbb(pa.size()), pab(pa.size());
+  std::vector<double> pa(size_t(w) * h), pb(pa.size()), paa(pa.size()), pbb(pa.size()),
+      pab(pa.size());
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       const size_t src = size_t(y + gy0) * a.width + (x + gx0), dst = size_t(y) * w + x;
@@ -80,7 +82,8 @@ double ssimLuma(const ImageRgba8& a, const ImageRgba8& b, int x0, int y0, int x1
     }
   }
   const auto ma = gaussianBlur(pa, w, h), mb = gaussianBlur(pb, w, h);
-  const auto maa = gaussianBlur(paa, w, h), mbb = gaussianBlur(pbb, w, h), mab = gaussianBlur(pab, w, h);
+  const auto maa = gaussianBlur(paa, w, h), mbb = gaussianBlur(pbb, w, h),
+             mab = gaussianBlur(pab, w, h);
   const double c1 = std::pow(0.01 * 255.0, 2), c2 = std::pow(0.03 * 255.0, 2);
   double sum = 0.0;
   long count = 0;
@@ -91,7 +94,8 @@ double ssimLuma(const ImageRgba8& a, const ImageRgba8& b, int x0, int y0, int x1
       const double varA = std::max(0.0, double(maa[i]) - muA * muA);
       const double varB = std::max(0.0, double(mbb[i]) - muB * muB);
       const double cov = double(mab[i]) - muA * muB;
-      sum += ((2 * muA * muB + c1) * (2 * cov + c2)) / ((muA * muA + muB * muB + c1) * (varA + varB + c2));
+      sum += ((2 * muA * muB + c1) * (2 * cov + c2)) /
+             ((muA * muA + muB * muB + c1) * (varA + varB + c2));
       ++count;
     }
   }

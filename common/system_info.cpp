@@ -58,7 +58,8 @@ std::string gitCommit() {
   const std::string dir = CANOPY_SOURCE_DIR;
   const std::string commit = runCommand("git -C '" + dir + "' rev-parse HEAD 2>/dev/null");
   if (commit.empty()) return "unknown";
-  const std::string dirty = runCommand("git -C '" + dir + "' status --porcelain --untracked-files=no 2>/dev/null");
+  const std::string dirty =
+      runCommand("git -C '" + dir + "' status --porcelain --untracked-files=no 2>/dev/null");
   return dirty.empty() ? commit : commit + "+dirty";
 }
 

@@ -58,7 +58,9 @@ bool isFinite(const glm::vec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
-bool isUnit(const glm::vec3& v) { return std::abs(glm::length(v) - 1.0f) < 1e-3f; }
+bool isUnit(const glm::vec3& v) {
+  return std::abs(glm::length(v) - 1.0f) < 1e-3f;
+}
 
 }  // namespace
 
@@ -77,7 +79,8 @@ void finalizeTree(Tree& tree, const std::string& source) {
     if (index >= wood.positions.size()) throwInputError("{}: wood index out of range", source);
   }
   for (uint16_t id : wood.materialIds) {
-    if (id >= tree.woodMaterials.size()) throwInputError("{}: wood material id out of range", source);
+    if (id >= tree.woodMaterials.size())
+      throwInputError("{}: wood material id out of range", source);
   }
   if (tree.leaves.empty()) throwInputError("{}: the model has no leaves", source);
   if (tree.leafTextures.empty()) throwInputError("{}: the model has no leaf texture", source);

@@ -31,10 +31,10 @@ struct Aabb {
 // The trunk and branches: an indexed triangle mesh.
 struct WoodMesh {
   std::vector<glm::vec3> positions;
-  std::vector<glm::vec3> normals;      // unit, one per position
-  std::vector<glm::vec2> uvs;          // one per position
-  std::vector<uint32_t> indices;       // three per triangle
-  std::vector<uint16_t> materialIds;   // one per triangle, into Tree::woodMaterials
+  std::vector<glm::vec3> normals;     // unit, one per position
+  std::vector<glm::vec2> uvs;         // one per position
+  std::vector<uint32_t> indices;      // three per triangle
+  std::vector<uint16_t> materialIds;  // one per triangle, into Tree::woodMaterials
 
   size_t triangleCount() const { return indices.size() / 3; }
 };
@@ -79,8 +79,8 @@ struct Leaf {
 struct BranchNode {
   int32_t parent = -1;
   std::vector<int32_t> children;
-  int32_t level = 0;        // depth; the root is level 0
-  Aabb bounds;              // everything in the subtree: wood and leaves
+  int32_t level = 0;  // depth; the root is level 0
+  Aabb bounds;        // everything in the subtree: wood and leaves
   uint32_t leafBegin = 0;
   uint32_t leafEnd = 0;
   uint32_t subtreeLeafEnd = 0;

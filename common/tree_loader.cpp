@@ -4,8 +4,8 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
-#include <assimp/Importer.hpp>
 #include <algorithm>
+#include <assimp/Importer.hpp>
 #include <cctype>
 #include <cmath>
 #include <cstring>
@@ -14,8 +14,8 @@
 #include <numeric>
 #include <unordered_map>
 
-#include <glm/geometric.hpp>
 #include <spdlog/spdlog.h>
+#include <glm/geometric.hpp>
 
 #include "common/error.h"
 #include "common/image.h"
@@ -25,7 +25,8 @@ namespace fs = std::filesystem;
 
 bool isLeafMaterialName(const std::string& name) {
   std::string lower = name;
-  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(lower.begin(), lower.end(), lower.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   for (const char* word : {"leaf", "leaves", "foliage", "needle"}) {
     if (lower.find(word) != std::string::npos) return true;
   }
@@ -69,7 +70,8 @@ const ImageRgba8& loadTexture(LoadContext& context, const std::string& reference
   if (const aiTexture* embedded = context.scene.GetEmbeddedTexture(reference.c_str())) {
     auto [it, inserted] = context.imageCache.try_emplace("embedded:" + reference);
     if (inserted) {
-      const std::string name = file + " (embedded texture " + reference + " of material '" + material + "')";
+      const std::string name =
+          file + " (embedded texture " + reference + " of material '" + material + "')";
       if (embedded->mHeight != 0) {
         // Uncompressed BGRA texels.
         ImageRgba8 image(static_cast<int>(embedded->mWidth), static_cast<int>(embedded->mHeight));
@@ -82,20 +84,22 @@ const ImageRgba8& loadTexture(LoadContext& context, const std::string& reference
         }
         it->second = std::move(image);
       } else {
-        it->second = readImageFromMemory(embedded->pcData, embedded->mWidth, embedded->achFormatHint, name);
+        it->second =
+            readImageFromMemory(embedded->pcData, embedded->mWidth, embedded->achFormatHint, name);
       }
     }
     return it->second;
   }
   std::string relative = reference;
   std::replace(relative.begin(), relative.end(), '\\', '/');
-  const fs::path resolved = fs::path(relative).is_absolute() ? fs::path(relative) : context.directory / relative;
+  const fs::path resolved =
+      fs::path(relative).is_absolute() ? fs::path(relative) : context.directory / relative;
   auto [it, inserted] = context.imageCache.try_emplace(resolved.string());
   if (inserted) {
     if (!fs::is_regular_file(resolved)) {
       context.imageCache.erase(it);
-      throwInputError("{}: texture '{}' of material '{}' not found (looked for {})", file, reference,
-                      material, resolved.string());
+      throwInputError("{}: texture '{}' of material '{}' not found (looked for {})", file,
+                      reference, material, resolved.string());
     }
     try {
       it->second = readImage(resolved);
@@ -137,7 +141,8 @@ struct PositionHash {
   size_t operator()(const PositionKey& k) const {
     uint32_t bits[3];
     std::memcpy(bits, &k, sizeof bits);
-    return (size_t(bits[0]) * 73856093u) ^ (size_t(bits[1]) * 19349663u) ^ (size_t(bits[2]) * 83492791u);
+    return (size_t(bits[0]) * 73856093u) ^ (size_t(bits[1]) * 19349663u) ^
+           (size_t(bits[2]) * 83492791u);
   }
 };
 
@@ -163,10 +168,11 @@ bool fitLeaf(const std::vector<glm::vec3>& positions, const std::vector<glm::vec
     }
   }
   if (bestArea <= 0.0f) return false;
-  glm::vec3 normal = glm::length(areaNormal) > 0.1f * bestArea
-                         ? glm::normalize(areaNormal)
-                         : glm::normalize(glm::cross(positions[triangles[best + 1]] - positions[triangles[best]],
-                                                     positions[triangles[best + 2]] - positions[triangles[best]]));
+  glm::vec3 normal =
+      glm::length(areaNormal) > 0.1f * bestArea
+          ? glm::normalize(areaNormal)
+          : glm::normalize(glm::cross(positions[triangles[best + 1]] - positions[triangles[best]],
+                                      positions[triangles[best + 2]] - positions[triangles[best]]));
   // Gradient of u and v on the largest triangle: dP/du and dP/dv.
   const glm::vec3 e1 = positions[triangles[best + 1]] - positions[triangles[best]];
   const glm::vec3 e2 = positions[triangles[best + 2]] - positions[triangles[best]];
@@ -207,7 +213,8 @@ bool fitLeaf(const std::vector<glm::vec3>& positions, const std::vector<glm::vec
   }
   const glm::vec2 half = (hi - lo) * 0.5f;
   if (half.x <= 0.0f || half.y <= 0.0f) return false;
-  stats.maxPlaneDistance = std::max(stats.maxPlaneDistance, double(planeDistance / std::max(half.x, half.y)));
+  stats.maxPlaneDistance =
+      std::max(stats.maxPlaneDistance, double(planeDistance / std::max(half.x, half.y)));
   leaf.normal = normal;
   leaf.axisU = axisU;
   leaf.axisV = axisV;
@@ -223,17 +230,20 @@ void addLeaves(const aiMesh& mesh, uint32_t textureId, bool zUp, Tree& tree, Lea
   std::vector<glm::vec2> uvs(mesh.mNumVertices, glm::vec2(0.0f));
   for (unsigned i = 0; i < mesh.mNumVertices; ++i) {
     positions[i] = convertUp(mesh.mVertices[i], zUp);
-    if (mesh.HasTextureCoords(0)) uvs[i] = {mesh.mTextureCoords[0][i].x, mesh.mTextureCoords[0][i].y};
+    if (mesh.HasTextureCoords(0))
+      uvs[i] = {mesh.mTextureCoords[0][i].x, mesh.mTextureCoords[0][i].y};
   }
   Components components(mesh.mNumVertices);
   std::unordered_map<PositionKey, uint32_t, PositionHash> firstAt;
   for (uint32_t i = 0; i < mesh.mNumVertices; ++i) {
-    auto [it, inserted] = firstAt.try_emplace(PositionKey{positions[i].x, positions[i].y, positions[i].z}, i);
+    auto [it, inserted] =
+        firstAt.try_emplace(PositionKey{positions[i].x, positions[i].y, positions[i].z}, i);
     if (!inserted) components.join(i, it->second);
   }
   for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
     const aiFace& face = mesh.mFaces[f];
-    for (unsigned k = 1; k < face.mNumIndices; ++k) components.join(face.mIndices[0], face.mIndices[k]);
+    for (unsigned k = 1; k < face.mNumIndices; ++k)
+      components.join(face.mIndices[0], face.mIndices[k]);
   }
   // Triangles grouped by component, components in order of first appearance (deterministic).
   std::unordered_map<uint32_t, size_t> slot;
@@ -279,8 +289,8 @@ void checkFinite(const aiMesh& mesh, const std::string& file) {
   for (unsigned i = 0; i < mesh.mNumVertices; ++i) {
     const aiVector3D& v = mesh.mVertices[i];
     if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) {
-      throwInputError("{}: mesh '{}' vertex {} is not finite ({}, {}, {})", file, mesh.mName.C_Str(), i,
-                      v.x, v.y, v.z);
+      throwInputError("{}: mesh '{}' vertex {} is not finite ({}, {}, {})", file,
+                      mesh.mName.C_Str(), i, v.x, v.y, v.z);
     }
   }
 }
@@ -301,12 +311,14 @@ LeafTexture leafTextureOf(LoadContext& context, const aiMaterial& material) {
   if (!opacityPath.empty() && opacityPath != colorPath) {
     const ImageRgba8& opacity = loadTexture(context, opacityPath, name);
     if (opacity.width != texture.front.width || opacity.height != texture.front.height) {
-      throwInputError("{}: leaf material '{}': opacity texture size {}x{} differs from colour {}x{}",
-                      context.options.path, name, opacity.width, opacity.height, texture.front.width,
-                      texture.front.height);
+      throwInputError(
+          "{}: leaf material '{}': opacity texture size {}x{} differs from colour {}x{}",
+          context.options.path, name, opacity.width, opacity.height, texture.front.width,
+          texture.front.height);
     }
     bool opacityHasAlpha = false;
-    for (size_t i = 3; i < opacity.pixels.size() && !opacityHasAlpha; i += 4) opacityHasAlpha = opacity.pixels[i] != 255;
+    for (size_t i = 3; i < opacity.pixels.size() && !opacityHasAlpha; i += 4)
+      opacityHasAlpha = opacity.pixels[i] != 255;
     for (size_t i = 0; i < opacity.pixels.size(); i += 4) {
       texture.front.pixels[i + 3] = opacityHasAlpha ? opacity.pixels[i + 3] : opacity.pixels[i];
     }
@@ -327,7 +339,8 @@ Tree loadTreeFile(const TreeFileOptions& options) {
   if (!fs::is_regular_file(file)) throwInputError("{}: file does not exist", file);
   if (fs::file_size(file) == 0) throwInputError("{}: file is empty", file);
   Assimp::Importer importer;
-  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
+                              aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   const aiScene* scene = importer.ReadFile(
       file, aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_GenSmoothNormals |
                 aiProcess_JoinIdenticalVertices | aiProcess_FlipUVs | aiProcess_SortByPType |
@@ -344,7 +357,8 @@ Tree loadTreeFile(const TreeFileOptions& options) {
     for (unsigned m = 0; m < scene->mNumMaterials; ++m) {
       if (materialName(*scene->mMaterials[m]) == wanted) isLeaf[m] = found = true;
     }
-    if (!found) throwInputError("{}: leaf_materials names '{}', which the file does not have", file, wanted);
+    if (!found)
+      throwInputError("{}: leaf_materials names '{}', which the file does not have", file, wanted);
   }
   if (options.leafMaterials.empty()) {
     for (unsigned m = 0; m < scene->mNumMaterials; ++m) {
@@ -367,18 +381,21 @@ Tree loadTreeFile(const TreeFileOptions& options) {
     const unsigned materialIndex = mesh.mMaterialIndex;
     const aiMaterial& material = *scene->mMaterials[materialIndex];
     if (isLeaf[materialIndex]) {
-      auto [it, inserted] = leafTextureOfMaterial.try_emplace(materialIndex, uint32_t(tree.leafTextures.size()));
+      auto [it, inserted] =
+          leafTextureOfMaterial.try_emplace(materialIndex, uint32_t(tree.leafTextures.size()));
       if (inserted) tree.leafTextures.push_back(leafTextureOf(context, material));
       addLeaves(mesh, it->second, zUp, tree, stats);
     } else {
-      auto [it, inserted] = woodMaterialOf.try_emplace(materialIndex, uint16_t(tree.woodMaterials.size()));
+      auto [it, inserted] =
+          woodMaterialOf.try_emplace(materialIndex, uint16_t(tree.woodMaterials.size()));
       if (inserted) {
         WoodMaterial wood;
         wood.name = materialName(material);
         aiColor4D diffuse(1, 1, 1, 1);
         material.Get(AI_MATKEY_COLOR_DIFFUSE, diffuse);
         // Material colours are linear factors; stored sRGB-encoded like textures.
-        wood.baseColor = glm::vec4(linearToSrgb(diffuse.r), linearToSrgb(diffuse.g), linearToSrgb(diffuse.b), 1.0f);
+        wood.baseColor = glm::vec4(linearToSrgb(diffuse.r), linearToSrgb(diffuse.g),
+                                   linearToSrgb(diffuse.b), 1.0f);
         const std::string path = texturePath(material, aiTextureType_DIFFUSE);
         if (!path.empty()) {
           wood.texture = static_cast<int>(tree.woodTextures.size());
@@ -391,13 +408,18 @@ Tree loadTreeFile(const TreeFileOptions& options) {
   }
   if (tree.leaves.empty()) {
     std::string names;
-    for (unsigned m = 0; m < scene->mNumMaterials; ++m) names += (names.empty() ? "'" : ", '") + materialName(*scene->mMaterials[m]) + "'";
-    throwInputError("{}: no leaves found (materials: {}); name them with leaf_materials", file, names);
+    for (unsigned m = 0; m < scene->mNumMaterials; ++m)
+      names += (names.empty() ? "'" : ", '") + materialName(*scene->mMaterials[m]) + "'";
+    throwInputError("{}: no leaves found (materials: {}); name them with leaf_materials", file,
+                    names);
   }
-  if (stats.degenerate > 0) spdlog::warn("{}: skipped {} degenerate leaf cards", file, stats.degenerate);
+  if (stats.degenerate > 0)
+    spdlog::warn("{}: skipped {} degenerate leaf cards", file, stats.degenerate);
   if (stats.maxPlaneDistance > 0.05) {
-    spdlog::warn("{}: some leaf cards are not planar (worst vertex {:.0f}% of the card size off its "
-                 "plane); they are drawn as flat quads", file, 100.0 * stats.maxPlaneDistance);
+    spdlog::warn(
+        "{}: some leaf cards are not planar (worst vertex {:.0f}% of the card size off its "
+        "plane); they are drawn as flat quads",
+        file, 100.0 * stats.maxPlaneDistance);
   }
   finalizeTree(tree, file);
   return tree;

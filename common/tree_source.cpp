@@ -29,8 +29,10 @@ TreeSpec parseTreeSpec(ConfigObject& config, const std::string& baseDirectory) {
   TreeSpec spec;
   spec.name = config.get<std::string>("name", "");
   if (config.has("captures")) {
-    throwInputError("config {}: capture folders need an image-based method; no registered method "
-                    "reconstructs from images yet", config.keyPath("captures"));
+    throwInputError(
+        "config {}: capture folders need an image-based method; no registered method "
+        "reconstructs from images yet",
+        config.keyPath("captures"));
   }
   const bool hasPreset = config.has("preset"), hasFile = config.has("file");
   if (hasPreset == hasFile) {
@@ -45,7 +47,8 @@ TreeSpec parseTreeSpec(ConfigObject& config, const std::string& baseDirectory) {
     spec.seed = static_cast<uint64_t>(seed);
     spec.leaves = config.get<int>("leaves", 0);
     if (spec.leaves < 0 || spec.leaves > 2'000'000) {
-      throwInputError("config {}: {} is out of range [1, 2000000]", config.keyPath("leaves"), spec.leaves);
+      throwInputError("config {}: {} is out of range [1, 2000000]", config.keyPath("leaves"),
+                      spec.leaves);
     }
   } else {
     spec.kind = TreeSpec::Kind::kFile;

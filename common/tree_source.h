@@ -18,11 +18,11 @@ namespace canopy {
 struct TreeSpec {
   enum class Kind { kPreset, kFile };
   Kind kind = Kind::kPreset;
-  std::string preset;                // kPreset: broadleaf | shrub | sparse
-  uint64_t seed = 1;                 // kPreset: L-system seed
-  int leaves = 0;                    // kPreset: leaf count override (0: the preset's)
-  TreeFileOptions file;              // kFile
-  std::string name;                  // the label in results (default: preset or file stem)
+  std::string preset;    // kPreset: broadleaf | shrub | sparse
+  uint64_t seed = 1;     // kPreset: L-system seed
+  int leaves = 0;        // kPreset: leaf count override (0: the preset's)
+  TreeFileOptions file;  // kFile
+  std::string name;      // the label in results (default: preset or file stem)
 
   // A label unique within an experiment: "broadleaf_s1", "broadleaf_s1_l100000", "oak".
   std::string label() const;

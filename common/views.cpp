@@ -11,10 +11,14 @@
 namespace canopy {
 namespace {
 constexpr float kPi = 3.14159265358979f;
-float radians(float degrees) { return degrees * kPi / 180.0f; }
+float radians(float degrees) {
+  return degrees * kPi / 180.0f;
+}
 }  // namespace
 
-glm::mat4 Camera::view() const { return glm::lookAt(position, target, up); }
+glm::mat4 Camera::view() const {
+  return glm::lookAt(position, target, up);
+}
 
 glm::mat4 Camera::projection(float aspect) const {
   return glm::perspective(radians(fovYDegrees), aspect, nearPlane, farPlane);
@@ -37,7 +41,8 @@ Camera orbitCamera(const Aabb& bounds, const ViewPose& pose, float fovYDegrees) 
   const float radius = 0.5f * glm::length(bounds.extent());
   const float elevation = radians(pose.elevation), azimuth = radians(pose.azimuth);
   const glm::vec3 horizontal(std::sin(azimuth), 0.0f, std::cos(azimuth));
-  const glm::vec3 direction = horizontal * std::cos(elevation) + glm::vec3(0, std::sin(elevation), 0);
+  const glm::vec3 direction =
+      horizontal * std::cos(elevation) + glm::vec3(0, std::sin(elevation), 0);
   Camera camera;
   camera.target = bounds.center();
   camera.position = camera.target + direction * (pose.distance * radius);

@@ -15,9 +15,13 @@ void AssetFolder::writeImage(const std::string& name, const ImageRgba8& image) {
   writePng(mFolder / name, image);
 }
 
-void AssetFolder::writeHeader() { writeTextAtomically(mFolder / "asset.json", mHeader.dump(2)); }
+void AssetFolder::writeHeader() {
+  writeTextAtomically(mFolder / "asset.json", mHeader.dump(2));
+}
 
-void AssetFolder::readHeader() { mHeader = readJsonFile((mFolder / "asset.json").string()); }
+void AssetFolder::readHeader() {
+  mHeader = readJsonFile((mFolder / "asset.json").string());
+}
 
 std::vector<uint8_t> AssetFolder::readBlob(const std::string& name) const {
   const auto path = mFolder / name;
@@ -26,7 +30,9 @@ std::vector<uint8_t> AssetFolder::readBlob(const std::string& name) const {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-ImageRgba8 AssetFolder::readImage(const std::string& name) const { return canopy::readImage(mFolder / name); }
+ImageRgba8 AssetFolder::readImage(const std::string& name) const {
+  return canopy::readImage(mFolder / name);
+}
 
 uint64_t AssetFolder::sizeOnDisk() const {
   uint64_t total = 0;

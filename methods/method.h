@@ -26,8 +26,8 @@ class ProgressBar;
 
 // What bake() may use besides the tree.
 struct BakeContext {
-  uint64_t seed = 1;                 // every random choice of a bake derives from it
-  ProgressBar* progress = nullptr;   // optional; methods report long loops through it
+  uint64_t seed = 1;                // every random choice of a bake derives from it
+  ProgressBar* progress = nullptr;  // optional; methods report long loops through it
 };
 
 enum class Shading { kUnlit, kLit };
@@ -41,7 +41,7 @@ struct FrameContext {
   glm::ivec2 viewportSize{0};
   Shading shading = Shading::kUnlit;
   glm::vec3 lightDirection{0.3f, 0.8f, 0.5f};  // unit, towards the light (world space)
-  float ambient = 0.35f;                        // ambient term of the lit shading
+  float ambient = 0.35f;                       // ambient term of the lit shading
   GLuint instanceBuffer = 0;
 };
 
@@ -65,7 +65,8 @@ class AssetFolder {
   template <typename T>
   std::vector<T> readBlobAs(const std::string& name) const {
     const std::vector<uint8_t> bytes = readBlob(name);
-    if (bytes.size() % sizeof(T) != 0) throwInputError("{}/{}: truncated blob", mFolder.string(), name);
+    if (bytes.size() % sizeof(T) != 0)
+      throwInputError("{}/{}: truncated blob", mFolder.string(), name);
     std::vector<T> values(bytes.size() / sizeof(T));
     std::memcpy(values.data(), bytes.data(), bytes.size());
     return values;

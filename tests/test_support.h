@@ -45,12 +45,15 @@ inline Tree smallTree(int leaves = 400, uint64_t seed = 7) {
 }
 
 // The headless context the tests render with (OSMesa, as on CI machines without a GPU).
-inline std::unique_ptr<gl::Context> makeTestContext() { return gl::createContext({gl::Backend::kOsMesa}); }
+inline std::unique_ptr<gl::Context> makeTestContext() {
+  return gl::createContext({gl::Backend::kOsMesa});
+}
 
 // Runs a command; returns its exit code and captures stderr into `errorOutput`.
 inline int runCommand(const std::string& command, std::string* errorOutput = nullptr) {
   const std::string errorFile = (std::filesystem::temp_directory_path() /
-                                 ("canopy_cmd_" + std::to_string(::getpid()) + ".err")).string();
+                                 ("canopy_cmd_" + std::to_string(::getpid()) + ".err"))
+                                    .string();
   const int status = std::system((command + " > /dev/null 2> " + errorFile).c_str());
   if (errorOutput) {
     std::ifstream in(errorFile);

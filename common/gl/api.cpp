@@ -14,7 +14,7 @@ Api loadApi(const ProcResolver& resolve) {
   Api table;
 #define CANOPY_GL_LOAD(type, name)                                                    \
   table.name = reinterpret_cast<type>(resolve("gl" #name));                           \
-  if (table.name == nullptr) {                                                         \
+  if (table.name == nullptr) {                                                        \
     throw std::runtime_error("OpenGL entry point gl" #name " could not be resolved"); \
   }
   CANOPY_GL_FUNCTIONS(CANOPY_GL_LOAD)
@@ -27,7 +27,9 @@ const Api& api() {
   return *gCurrent;
 }
 
-void setCurrentApi(const Api* table) { gCurrent = table; }
+void setCurrentApi(const Api* table) {
+  gCurrent = table;
+}
 
 void checkError(const char* where) {
   const GLenum error = api().GetError();

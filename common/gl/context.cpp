@@ -40,9 +40,15 @@ std::string Context::vendor() const {
 std::unique_ptr<Context> createContext(const ContextOptions& options) {
   std::unique_ptr<Context> context;
   switch (options.backend) {
-    case Backend::kOsMesa: context = createOsMesaContext(options); break;
-    case Backend::kEgl: context = createEglContext(options); break;
-    case Backend::kGlfw: context = createGlfwContext(options); break;
+    case Backend::kOsMesa:
+      context = createOsMesaContext(options);
+      break;
+    case Backend::kEgl:
+      context = createEglContext(options);
+      break;
+    case Backend::kGlfw:
+      context = createGlfwContext(options);
+      break;
   }
   // A context whose strings are null renders nothing (the libGL/libOSMesa trap): refuse it.
   if (context->renderer().empty()) {
@@ -61,9 +67,12 @@ Backend parseBackend(std::string_view name) {
 
 std::string_view backendName(Backend backend) {
   switch (backend) {
-    case Backend::kOsMesa: return "osmesa";
-    case Backend::kEgl: return "egl";
-    case Backend::kGlfw: return "glfw";
+    case Backend::kOsMesa:
+      return "osmesa";
+    case Backend::kEgl:
+      return "egl";
+    case Backend::kGlfw:
+      return "glfw";
   }
   return "?";
 }

@@ -18,8 +18,8 @@ enum class Backend {
 
 struct ContextOptions {
   Backend backend = Backend::kOsMesa;
-  int windowWidth = 1280;   // GLFW only: the window's size
-  int windowHeight = 1024;  // GLFW only
+  int windowWidth = 1280;      // GLFW only: the window's size
+  int windowHeight = 1024;     // GLFW only
   bool visibleWindow = false;  // GLFW only: show the window (the viewer) or keep it hidden
   std::string title = "Canopy";
 };

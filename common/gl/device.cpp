@@ -23,12 +23,24 @@ void LedgerEntry::reset() {
   mId = 0;
 }
 
-void deleteBufferName(GLuint id) { api().DeleteBuffers(1, &id); }
-void deleteTextureName(GLuint id) { api().DeleteTextures(1, &id); }
-void deleteVertexArrayName(GLuint id) { api().DeleteVertexArrays(1, &id); }
-void deleteFramebufferName(GLuint id) { api().DeleteFramebuffers(1, &id); }
-void deleteRenderbufferName(GLuint id) { api().DeleteRenderbuffers(1, &id); }
-void deleteProgramName(GLuint id) { api().DeleteProgram(id); }
+void deleteBufferName(GLuint id) {
+  api().DeleteBuffers(1, &id);
+}
+void deleteTextureName(GLuint id) {
+  api().DeleteTextures(1, &id);
+}
+void deleteVertexArrayName(GLuint id) {
+  api().DeleteVertexArrays(1, &id);
+}
+void deleteFramebufferName(GLuint id) {
+  api().DeleteFramebuffers(1, &id);
+}
+void deleteRenderbufferName(GLuint id) {
+  api().DeleteRenderbuffers(1, &id);
+}
+void deleteProgramName(GLuint id) {
+  api().DeleteProgram(id);
+}
 
 Buffer Device::createBuffer(MemoryCategory category, GLenum target, size_t bytes, const void* data,
                             std::string label, GLenum usage) {
@@ -142,7 +154,8 @@ RenderTarget Device::createRenderTarget(int width, int height, GLenum colorForma
   const GLenum status = g.CheckFramebufferStatus(GL_FRAMEBUFFER);
   g.BindFramebuffer(GL_FRAMEBUFFER, 0);
   if (status != GL_FRAMEBUFFER_COMPLETE) {
-    throw std::runtime_error(fmt::format("render target {}x{} incomplete (0x{:x})", width, height, status));
+    throw std::runtime_error(
+        fmt::format("render target {}x{} incomplete (0x{:x})", width, height, status));
   }
   checkError("createRenderTarget");
   return target;
@@ -205,7 +218,8 @@ Program Device::createProgram(const std::vector<ShaderSource>& stages) {
       g.GetShaderInfoLog(shader, logLength, nullptr, log.data());
       g.DeleteShader(shader);
       for (GLuint s : shaders) g.DeleteShader(s);
-      throw std::runtime_error(fmt::format("shader compile error: {}", nameFileInLog(stage.path, log.c_str())));
+      throw std::runtime_error(
+          fmt::format("shader compile error: {}", nameFileInLog(stage.path, log.c_str())));
     }
     g.AttachShader(program.id(), shader);
     shaders.push_back(shader);
@@ -225,18 +239,29 @@ Program Device::createProgram(const std::vector<ShaderSource>& stages) {
   return program;
 }
 
-void Program::use() const { api().UseProgram(id()); }
+void Program::use() const {
+  api().UseProgram(id());
+}
 
 GLint Program::location(const char* uniform) const {
   auto it = mLocations.find(uniform);
-  if (it == mLocations.end()) it = mLocations.emplace(uniform, api().GetUniformLocation(id(), uniform)).first;
+  if (it == mLocations.end())
+    it = mLocations.emplace(uniform, api().GetUniformLocation(id(), uniform)).first;
   return it->second;
 }
 
-void Program::set(const char* uniform, int value) const { api().Uniform1i(location(uniform), value); }
-void Program::set(const char* uniform, float value) const { api().Uniform1f(location(uniform), value); }
-void Program::set(const char* uniform, const glm::vec2& v) const { api().Uniform2f(location(uniform), v.x, v.y); }
-void Program::set(const char* uniform, const glm::vec3& v) const { api().Uniform3f(location(uniform), v.x, v.y, v.z); }
+void Program::set(const char* uniform, int value) const {
+  api().Uniform1i(location(uniform), value);
+}
+void Program::set(const char* uniform, float value) const {
+  api().Uniform1f(location(uniform), value);
+}
+void Program::set(const char* uniform, const glm::vec2& v) const {
+  api().Uniform2f(location(uniform), v.x, v.y);
+}
+void Program::set(const char* uniform, const glm::vec3& v) const {
+  api().Uniform3f(location(uniform), v.x, v.y, v.z);
+}
 void Program::set(const char* uniform, const glm::vec4& v) const {
   api().Uniform4f(location(uniform), v.x, v.y, v.z, v.w);
 }

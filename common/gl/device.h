@@ -74,14 +74,14 @@ struct Buffer {
 };
 
 struct TextureDesc {
-  GLenum target = GL_TEXTURE_2D;         // GL_TEXTURE_2D or GL_TEXTURE_2D_ARRAY
+  GLenum target = GL_TEXTURE_2D;  // GL_TEXTURE_2D or GL_TEXTURE_2D_ARRAY
   int width = 1;
   int height = 1;
-  int layers = 1;                        // array layers (GL_TEXTURE_2D_ARRAY)
+  int layers = 1;  // array layers (GL_TEXTURE_2D_ARRAY)
   GLenum internalFormat = GL_RGBA8;
-  bool mipmaps = false;                  // allocate the full chain (counted in the ledger)
+  bool mipmaps = false;  // allocate the full chain (counted in the ledger)
   MemoryCategory category = MemoryCategory::kTexture;
-  std::string label;                     // what the texture is, for the ledger
+  std::string label;  // what the texture is, for the ledger
 };
 
 struct Texture {
@@ -169,7 +169,8 @@ class Device {
   Texture createTexture(const TextureDesc& desc);
   // Uploads level 0 (all layers for arrays) from tightly packed pixels, then builds mipmaps.
   void uploadTexture(Texture& texture, GLenum format, GLenum type, const void* pixels);
-  void uploadTextureLayer(Texture& texture, int layer, GLenum format, GLenum type, const void* pixels);
+  void uploadTextureLayer(Texture& texture, int layer, GLenum format, GLenum type,
+                          const void* pixels);
   void generateMipmaps(Texture& texture);
 
   RenderTarget createRenderTarget(int width, int height, GLenum colorFormat);

@@ -31,11 +31,14 @@ class EglContext final : public Context {
       if (tryCreate(display)) break;
     }
     if (mContext == EGL_NO_CONTEXT) {
-      throwInputError("OpenGL backend egl: no EGL device or surfaceless display gives a 4.3+ "
-                      "core context (EGL error 0x{:x})", eglGetError());
+      throwInputError(
+          "OpenGL backend egl: no EGL device or surfaceless display gives a 4.3+ "
+          "core context (EGL error 0x{:x})",
+          eglGetError());
     }
     bind();
-    resolveEntryPoints([](const char* name) { return reinterpret_cast<void*>(eglGetProcAddress(name)); });
+    resolveEntryPoints(
+        [](const char* name) { return reinterpret_cast<void*>(eglGetProcAddress(name)); });
   }
 
   ~EglContext() override {
@@ -60,7 +63,8 @@ class EglContext final : public Context {
     auto getPlatformDisplay = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
         eglGetProcAddress("eglGetPlatformDisplayEXT"));
     if (!getPlatformDisplay) return {eglGetDisplay(EGL_DEFAULT_DISPLAY)};
-    auto queryDevices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+    auto queryDevices =
+        reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
     auto queryDeviceString = reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(
         eglGetProcAddress("eglQueryDeviceStringEXT"));
     if (queryDevices && hasExtension(clientExtensions, "EGL_EXT_platform_device")) {
@@ -68,16 +72,19 @@ class EglContext final : public Context {
       EGLint count = 0;
       if (queryDevices(16, devices, &count)) {
         for (EGLint i = 0; i < count; ++i) {
-          const char* extensions = queryDeviceString ? queryDeviceString(devices[i], EGL_EXTENSIONS) : nullptr;
+          const char* extensions =
+              queryDeviceString ? queryDeviceString(devices[i], EGL_EXTENSIONS) : nullptr;
           EGLDisplay display = getPlatformDisplay(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
           if (display == EGL_NO_DISPLAY) continue;
-          (hasExtension(extensions, "EGL_MESA_device_software") ? software : hardware).push_back(display);
+          (hasExtension(extensions, "EGL_MESA_device_software") ? software : hardware)
+              .push_back(display);
         }
       }
     }
     std::vector<EGLDisplay> ordered = hardware;
     if (hasExtension(clientExtensions, "EGL_MESA_platform_surfaceless")) {
-      EGLDisplay display = getPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+      EGLDisplay display =
+          getPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
       if (display != EGL_NO_DISPLAY) ordered.push_back(display);
     }
     ordered.insert(ordered.end(), software.begin(), software.end());
@@ -95,12 +102,17 @@ class EglContext final : public Context {
       const EGLint configAttributes[] = {EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE,
                                          EGL_OPENGL_BIT, EGL_NONE};
       EGLint count = 0;
-      if (!eglChooseConfig(display, configAttributes, &config, 1, &count) || count == 0) return false;
+      if (!eglChooseConfig(display, configAttributes, &config, 1, &count) || count == 0)
+        return false;
     }
     for (const EGLint minorVersion : {5, 3}) {
-      const EGLint contextAttributes[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION,
-                                          minorVersion, EGL_CONTEXT_OPENGL_PROFILE_MASK,
-                                          EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
+      const EGLint contextAttributes[] = {EGL_CONTEXT_MAJOR_VERSION,
+                                          4,
+                                          EGL_CONTEXT_MINOR_VERSION,
+                                          minorVersion,
+                                          EGL_CONTEXT_OPENGL_PROFILE_MASK,
+                                          EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                                          EGL_NONE};
       mContext = eglCreateContext(display, config, EGL_NO_CONTEXT, contextAttributes);
       if (mContext != EGL_NO_CONTEXT) break;
     }

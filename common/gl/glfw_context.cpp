@@ -23,8 +23,10 @@ class GlfwContext final : public Context {
   explicit GlfwContext(const ContextOptions& options) : Context(Backend::kGlfw) {
     glfwSetErrorCallback(recordGlfwError);
     if (gLiveWindows == 0 && !glfwInit()) {
-      throwInputError("OpenGL backend glfw: no display ({}); set DISPLAY, run under xvfb-run, or "
-                      "use --gl osmesa", gLastGlfwError);
+      throwInputError(
+          "OpenGL backend glfw: no display ({}); set DISPLAY, run under xvfb-run, or "
+          "use --gl osmesa",
+          gLastGlfwError);
     }
     ++gLiveWindows;
     for (const int minor : {5, 3}) {
@@ -44,7 +46,8 @@ class GlfwContext final : public Context {
                       gLastGlfwError);
     }
     bind();
-    resolveEntryPoints([](const char* name) { return reinterpret_cast<void*>(glfwGetProcAddress(name)); });
+    resolveEntryPoints(
+        [](const char* name) { return reinterpret_cast<void*>(glfwGetProcAddress(name)); });
   }
 
   ~GlfwContext() override {

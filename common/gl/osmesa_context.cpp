@@ -31,9 +31,8 @@ class OsMesaContext final : public Context {
     }
     if (!mContext) throwInputError("OpenGL backend osmesa: cannot create a 4.3+ core context");
     bind();
-    resolveEntryPoints([](const char* name) {
-      return reinterpret_cast<void*>(OSMesaGetProcAddress(name));
-    });
+    resolveEntryPoints(
+        [](const char* name) { return reinterpret_cast<void*>(OSMesaGetProcAddress(name)); });
   }
 
   ~OsMesaContext() override { OSMesaDestroyContext(mContext); }

@@ -12,8 +12,8 @@ namespace canopy {
 namespace {
 
 struct PolygonalParams {
-  bool drawWood = true;    // draw the trunk and branches (false: leaves only)
-  bool mipmaps = true;     // mipmapped leaf textures (trilinear) as a real engine would draw them
+  bool drawWood = true;  // draw the trunk and branches (false: leaves only)
+  bool mipmaps = true;   // mipmapped leaf textures (trilinear) as a real engine would draw them
 
   template <class Visitor>
   void visit(Visitor& v) {
@@ -54,8 +54,9 @@ class Polygonal final : public Method {
     }
     std::vector<uint32_t> order(wood.triangleCount());
     std::iota(order.begin(), order.end(), 0u);
-    std::stable_sort(order.begin(), order.end(),
-                     [&](uint32_t a, uint32_t b) { return wood.materialIds[a] < wood.materialIds[b]; });
+    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+      return wood.materialIds[a] < wood.materialIds[b];
+    });
     for (uint32_t t : order) {
       const uint32_t material = wood.materialIds[t];
       if (mWoodRanges.empty() || mWoodRanges.back().material != material) {
@@ -78,50 +79,58 @@ class Polygonal final : public Method {
         mLeafRanges.push_back({static_cast<uint32_t>(mLeafIndices.size()), 0, leaf.texture});
       }
       const auto base = static_cast<uint32_t>(mLeafVertices.size());
-      for (int c = 0; c < 4; ++c) mLeafVertices.push_back({leaf.corner(c), leaf.normal, leaf.cornerUv(c)});
+      for (int c = 0; c < 4; ++c)
+        mLeafVertices.push_back({leaf.corner(c), leaf.normal, leaf.cornerUv(c)});
       for (uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) mLeafIndices.push_back(base + k);
       mLeafRanges.back().count += 6;
     }
     mLeafTextures.clear();
-    for (const LeafTexture& texture : tree.leafTextures) mLeafTextures.push_back({texture.front, texture.back});
+    for (const LeafTexture& texture : tree.leafTextures)
+      mLeafTextures.push_back({texture.front, texture.back});
   }
 
   void upload(gl::Device& device) override {
     using gl::MemoryCategory;
-    mWoodVbo = device.createBuffer(MemoryCategory::kGeometry, GL_ARRAY_BUFFER, mWoodVertices, "wood vertices");
-    mWoodIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mWoodIndices, "wood indices");
-    mLeafVbo = device.createBuffer(MemoryCategory::kGeometry, GL_ARRAY_BUFFER, mLeafVertices, "leaf vertices");
-    mLeafIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mLeafIndices, "leaf indices");
+    mWoodVbo = device.createBuffer(MemoryCategory::kGeometry, GL_ARRAY_BUFFER, mWoodVertices,
+                                   "wood vertices");
+    mWoodIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mWoodIndices,
+                                   "wood indices");
+    mLeafVbo = device.createBuffer(MemoryCategory::kGeometry, GL_ARRAY_BUFFER, mLeafVertices,
+                                   "leaf vertices");
+    mLeafIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mLeafIndices,
+                                   "leaf indices");
     mWoodVao = makeVertexArray(mWoodVbo, mWoodIbo);
     mLeafVao = makeVertexArray(mLeafVbo, mLeafIbo);
     mLeafGpuTextures.clear();
     for (const auto& [front, back] : mLeafTextures) {
-      gl::Texture texture = device.createTexture({GL_TEXTURE_2D_ARRAY, front.width, front.height, 2,
-                                                  GL_SRGB8_ALPHA8, mParams.mipmaps,
-                                                  MemoryCategory::kTexture, "leaf images"});
-      const ImageRgba8* faces[2] = {&front, &back};
-      for (int layer = 0; layer < 2; ++layer) {
-        const ImageRgba8& image = faces[layer]->width == front.width && faces[layer]->height == front.height
-                                      ? *faces[layer] : front;
-        device.uploadTextureLayer(texture, layer, GL_RGBA, GL_UNSIGNED_BYTE, image.pixels.data());
-      }
+      // One layer when the underside is the same image (most files), two otherwise.
+      const bool twoSided =
+          back.pixels != front.pixels && back.width == front.width && back.height == front.height;
+      gl::Texture texture = device.createTexture(
+          {GL_TEXTURE_2D_ARRAY, front.width, front.height, twoSided ? 2 : 1, GL_SRGB8_ALPHA8,
+           mParams.mipmaps, MemoryCategory::kTexture, "leaf images"});
+      device.uploadTextureLayer(texture, 0, GL_RGBA, GL_UNSIGNED_BYTE, front.pixels.data());
+      if (twoSided)
+        device.uploadTextureLayer(texture, 1, GL_RGBA, GL_UNSIGNED_BYTE, back.pixels.data());
       if (texture.levels > 1) device.generateMipmaps(texture);
       gl::setTextureSampling(texture, true, false);
       mLeafGpuTextures.push_back(std::move(texture));
     }
     mWoodGpuTextures.clear();
     for (const ImageRgba8& image : mWoodTextures) {
-      gl::Texture texture = device.createTexture({GL_TEXTURE_2D, image.width, image.height, 1,
-                                                  GL_SRGB8_ALPHA8, mParams.mipmaps,
-                                                  MemoryCategory::kTexture, "wood texture"});
+      gl::Texture texture =
+          device.createTexture({GL_TEXTURE_2D, image.width, image.height, 1, GL_SRGB8_ALPHA8,
+                                mParams.mipmaps, MemoryCategory::kTexture, "wood texture"});
       device.uploadTexture(texture, GL_RGBA, GL_UNSIGNED_BYTE, image.pixels.data());
       gl::setTextureSampling(texture, true, true);
       mWoodGpuTextures.push_back(std::move(texture));
     }
-    mLeafProgram = device.createProgram({gl::embeddedShader("methods/polygonal/polygonal.vert"),
-                                         gl::embeddedShader("methods/polygonal/polygonal_leaf.frag")});
-    mWoodProgram = device.createProgram({gl::embeddedShader("methods/polygonal/polygonal.vert"),
-                                         gl::embeddedShader("methods/polygonal/polygonal_wood.frag")});
+    mLeafProgram =
+        device.createProgram({gl::embeddedShader("methods/polygonal/polygonal.vert"),
+                              gl::embeddedShader("methods/polygonal/polygonal_leaf.frag")});
+    mWoodProgram =
+        device.createProgram({gl::embeddedShader("methods/polygonal/polygonal.vert"),
+                              gl::embeddedShader("methods/polygonal/polygonal_wood.frag")});
   }
 
   void draw(const FrameContext& frame, std::span<const Instance> instances) override {
@@ -129,7 +138,8 @@ class Polygonal final : public Method {
     const gl::Api& g = gl::api();
     const glm::mat4 viewProjection = frame.projection * frame.view;
     const auto count = static_cast<GLsizei>(instances.size());
-    g.Disable(GL_CULL_FACE);  // leaves are two-sided; wood is closed, so culling would not change it
+    g.Disable(
+        GL_CULL_FACE);  // leaves are two-sided; wood is closed, so culling would not change it
     mLeafProgram.use();
     setCommonUniforms(mLeafProgram, frame, viewProjection);
     mLeafProgram.set("uLeafImages", 0);
@@ -137,7 +147,9 @@ class Polygonal final : public Method {
     bindInstanceMatrices(frame.instanceBuffer, 4);
     g.ActiveTexture(GL_TEXTURE0);
     for (const DrawRange& range : mLeafRanges) {
-      g.BindTexture(GL_TEXTURE_2D_ARRAY, mLeafGpuTextures[range.material].id());
+      const gl::Texture& texture = mLeafGpuTextures[range.material];
+      mLeafProgram.set("uBackLayer", float(texture.desc.layers - 1));
+      g.BindTexture(GL_TEXTURE_2D_ARRAY, texture.id());
       g.DrawElementsInstanced(GL_TRIANGLES, static_cast<GLsizei>(range.count), GL_UNSIGNED_INT,
                               reinterpret_cast<const void*>(sizeof(uint32_t) * range.first), count);
     }
@@ -149,13 +161,16 @@ class Polygonal final : public Method {
       bindInstanceMatrices(frame.instanceBuffer, 4);
       for (const DrawRange& range : mWoodRanges) {
         const WoodMaterial& material = mWoodMaterials[range.material];
-        const glm::vec3 linear(srgbToLinear(material.baseColor.r), srgbToLinear(material.baseColor.g),
+        const glm::vec3 linear(srgbToLinear(material.baseColor.r),
+                               srgbToLinear(material.baseColor.g),
                                srgbToLinear(material.baseColor.b));
         mWoodProgram.set("uBaseColor", linear);
         mWoodProgram.set("uHasTexture", material.texture >= 0 ? 1 : 0);
-        if (material.texture >= 0) g.BindTexture(GL_TEXTURE_2D, mWoodGpuTextures[material.texture].id());
+        if (material.texture >= 0)
+          g.BindTexture(GL_TEXTURE_2D, mWoodGpuTextures[material.texture].id());
         g.DrawElementsInstanced(GL_TRIANGLES, static_cast<GLsizei>(range.count), GL_UNSIGNED_INT,
-                                reinterpret_cast<const void*>(sizeof(uint32_t) * range.first), count);
+                                reinterpret_cast<const void*>(sizeof(uint32_t) * range.first),
+                                count);
       }
     }
     g.BindVertexArray(0);
@@ -175,11 +190,13 @@ class Polygonal final : public Method {
     asset.writeBlob("leaf_ranges.bin", mLeafRanges);
     header["wood_materials"] = nlohmann::json::array();
     for (const WoodMaterial& m : mWoodMaterials) {
-      header["wood_materials"].push_back({{"name", m.name},
-                                          {"base_color", {m.baseColor.r, m.baseColor.g, m.baseColor.b, m.baseColor.a}},
-                                          {"texture", m.texture}});
+      header["wood_materials"].push_back(
+          {{"name", m.name},
+           {"base_color", {m.baseColor.r, m.baseColor.g, m.baseColor.b, m.baseColor.a}},
+           {"texture", m.texture}});
     }
-    for (size_t i = 0; i < mWoodTextures.size(); ++i) asset.writeImage(fmt::format("wood_{}.png", i), mWoodTextures[i]);
+    for (size_t i = 0; i < mWoodTextures.size(); ++i)
+      asset.writeImage(fmt::format("wood_{}.png", i), mWoodTextures[i]);
     header["wood_textures"] = mWoodTextures.size();
     for (size_t i = 0; i < mLeafTextures.size(); ++i) {
       asset.writeImage(fmt::format("leaf_{}_front.png", i), mLeafTextures[i].first);
@@ -220,7 +237,8 @@ class Polygonal final : public Method {
 
  private:
   void validateLoaded(const std::string& folder) const {
-    const auto checkRanges = [&](const std::vector<DrawRange>& ranges, size_t indices, size_t materials) {
+    const auto checkRanges = [&](const std::vector<DrawRange>& ranges, size_t indices,
+                                 size_t materials) {
       for (const DrawRange& r : ranges) {
         if (size_t(r.first) + r.count > indices || r.material >= materials) {
           throwInputError("{}: corrupt draw range in polygonal asset", folder);
@@ -229,8 +247,10 @@ class Polygonal final : public Method {
     };
     checkRanges(mWoodRanges, mWoodIndices.size(), mWoodMaterials.size());
     checkRanges(mLeafRanges, mLeafIndices.size(), mLeafTextures.size());
-    for (uint32_t i : mWoodIndices) if (i >= mWoodVertices.size()) throwInputError("{}: corrupt wood indices", folder);
-    for (uint32_t i : mLeafIndices) if (i >= mLeafVertices.size()) throwInputError("{}: corrupt leaf indices", folder);
+    for (uint32_t i : mWoodIndices)
+      if (i >= mWoodVertices.size()) throwInputError("{}: corrupt wood indices", folder);
+    for (uint32_t i : mLeafIndices)
+      if (i >= mLeafVertices.size()) throwInputError("{}: corrupt leaf indices", folder);
   }
 
   static gl::VertexArray makeVertexArray(const gl::Buffer& vertices, const gl::Buffer& indices) {
@@ -241,11 +261,14 @@ class Polygonal final : public Method {
     g.BindVertexArray(id);
     g.BindBuffer(GL_ARRAY_BUFFER, vertices.id());
     g.EnableVertexAttribArray(0);
-    g.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex), reinterpret_cast<const void*>(offsetof(Vertex, position)));
+    g.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                          reinterpret_cast<const void*>(offsetof(Vertex, position)));
     g.EnableVertexAttribArray(1);
-    g.VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex), reinterpret_cast<const void*>(offsetof(Vertex, normal)));
+    g.VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                          reinterpret_cast<const void*>(offsetof(Vertex, normal)));
     g.EnableVertexAttribArray(2);
-    g.VertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, sizeof(Vertex), reinterpret_cast<const void*>(offsetof(Vertex, uv)));
+    g.VertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                          reinterpret_cast<const void*>(offsetof(Vertex, uv)));
     g.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, indices.id());
     g.BindVertexArray(0);
     g.BindBuffer(GL_ARRAY_BUFFER, 0);
@@ -276,10 +299,11 @@ class Polygonal final : public Method {
 }  // namespace
 
 void registerPolygonal(MethodRegistry& registry) {
-  registry.add({"polygonal", "the reference: wood mesh and every leaf quad with alpha test",
-                [](const nlohmann::json& params, const std::string& path) -> std::unique_ptr<Method> {
-                  return std::make_unique<Polygonal>(readParams<PolygonalParams>(params, path, "polygonal"));
-                }});
+  registry.add(
+      {"polygonal", "the reference: wood mesh and every leaf quad with alpha test",
+       [](const nlohmann::json& params, const std::string& path) -> std::unique_ptr<Method> {
+         return std::make_unique<Polygonal>(readParams<PolygonalParams>(params, path, "polygonal"));
+       }});
 }
 
 }  // namespace canopy

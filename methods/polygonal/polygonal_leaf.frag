@@ -3,7 +3,8 @@
 in vec3 vNormal;
 in vec2 vUv;
 
-uniform sampler2DArray uLeafImages;  // layer 0 front, layer 1 back; sRGB, so samples are linear
+uniform sampler2DArray uLeafImages;  // layer 0 front, uBackLayer back; sRGB, so samples are linear
+uniform float uBackLayer;            // 1 for two-sided images, 0 when the back is the front
 uniform int uLit;
 uniform vec3 uLightDirection;
 uniform float uAmbient;
@@ -11,7 +12,7 @@ uniform float uAmbient;
 out vec4 outColor;
 
 void main() {
-  vec4 texel = texture(uLeafImages, vec3(vUv, gl_FrontFacing ? 0.0 : 1.0));
+  vec4 texel = texture(uLeafImages, vec3(vUv, gl_FrontFacing ? 0.0 : uBackLayer));
   if (texel.a < 0.5) discard;
   vec3 color = texel.rgb;
   if (uLit != 0) {

@@ -28,14 +28,16 @@ std::string tinyConfig(const std::string& name, int azimuths = 2) {
 
 std::multiset<std::string> keysOf(const std::filesystem::path& metrics) {
   std::multiset<std::string> keys;
-  for (const auto& record : ResultsStore::readRecords(metrics)) keys.insert(record.at("record_key").get<std::string>());
+  for (const auto& record : ResultsStore::readRecords(metrics))
+    keys.insert(record.at("record_key").get<std::string>());
   return keys;
 }
 
 TEST(BenchCli, RunsAConfigIntoTheResultsLayoutAndSkipsWhatIsDone) {
   test::TempDir dir;
   test::writeText(dir / "tiny.json", tinyConfig("tiny"));
-  const std::string command = kBench + " --quiet --config " + (dir / "tiny.json").string() + " --out " + (dir / "out").string();
+  const std::string command = kBench + " --quiet --config " + (dir / "tiny.json").string() +
+                              " --out " + (dir / "out").string();
   ASSERT_EQ(test::runCommand(command), 0);
   for (const char* file : {"metrics.jsonl", "summary.csv", "summary.md", "meta.json"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / "out" / file)) << file;
@@ -48,12 +50,16 @@ TEST(BenchCli, RunsAConfigIntoTheResultsLayoutAndSkipsWhatIsDone) {
     const std::string kind = record.at("kind");
     if (kind == "view") {
       ++views;
-      for (const char* key : {"tree", "method", "params", "distance", "elevation", "azimuth", "psnr", "psnr_frame", "ssim", "coverage_error"}) {
+      for (const char* key : {"tree", "method", "params", "distance", "elevation", "azimuth",
+                              "psnr", "psnr_frame", "ssim", "coverage_error"}) {
         EXPECT_TRUE(record.contains(key)) << key;
       }
-      if (record.at("variant") == "polygonal") EXPECT_DOUBLE_EQ(record.at("psnr").get<double>(), 100.0);
+      if (record.at("variant") == "polygonal")
+        EXPECT_DOUBLE_EQ(record.at("psnr").get<double>(), 100.0);
     } else if (kind == "forest") {
-      for (const char* key : {"trees", "frame_ms_median", "frame_ms_p95", "fps", "speedup_vs_polygonal"}) EXPECT_TRUE(record.contains(key)) << key;
+      for (const char* key :
+           {"trees", "frame_ms_median", "frame_ms_p95", "fps", "speedup_vs_polygonal"})
+        EXPECT_TRUE(record.contains(key)) << key;
     } else if (kind == "bake") {
       EXPECT_GT(record.at("memory_bytes").at("total").get<double>(), 0.0);
       EXPECT_GT(record.at("disk_bytes").get<double>(), 0.0);
@@ -66,7 +72,8 @@ TEST(BenchCli, RunsAConfigIntoTheResultsLayoutAndSkipsWhatIsDone) {
   const auto meta = readJsonFile((dir / "out" / "meta.json").string());
   EXPECT_FALSE(meta.at("gl").at("renderer").get<std::string>().empty());
   EXPECT_EQ(meta.at("config_hash").get<std::string>().rfind("fnv1a64:", 0), 0u);
-  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "images" / "sparse_s3_l300" / "reference" / "d2_e0_a0.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "images" / "sparse_s3_l300" / "reference" /
+                                      "d2_e0_a0.png"));
   // A rerun recomputes nothing: the same records, no duplicates.
   const auto keysBefore = keysOf(dir / "out" / "metrics.jsonl");
   ASSERT_EQ(test::runCommand(command), 0);
@@ -78,23 +85,30 @@ TEST(BenchCli, BadInputExitsWithCode2AndOneLineNamingTheProblem) {
   const auto expectBadInput = [&](const std::string& config, const std::string& words) {
     test::writeText(dir / "bad.json", config);
     std::string error;
-    const int code = test::runCommand(kBench + " --quiet --config " + (dir / "bad.json").string() + " --out " +
-                                          (dir / "out").string(), &error);
+    const int code = test::runCommand(kBench + " --quiet --config " + (dir / "bad.json").string() +
+                                          " --out " + (dir / "out").string(),
+                                      &error);
     EXPECT_EQ(code, 2) << config;
     EXPECT_NE(error.find(words), std::string::npos) << error;
     EXPECT_EQ(std::count(error.begin(), error.end(), '\n'), 1) << error;
   };
   expectBadInput(R"({"name": "x", "view": {}})", "view");
-  expectBadInput(R"({"name": "x", "methods": [{"method": "polygonal", "params": {"wod": 1}}]})", "wod");
+  expectBadInput(R"({"name": "x", "methods": [{"method": "polygonal", "params": {"wod": 1}}]})",
+                 "wod");
   expectBadInput(R"({"name": "x", "views": {"supersample": 99}})", "views.supersample");
-  expectBadInput(R"({"name": "x", "trees": [{"file": "/nonexistent/oak.glb"}]})", "/nonexistent/oak.glb");
+  expectBadInput(R"({"name": "x", "trees": [{"file": "/nonexistent/oak.glb"}]})",
+                 "/nonexistent/oak.glb");
   expectBadInput(R"({"name": "x", "methods": [{"method": "impostor9000"}]})", "impostor9000");
   expectBadInput(R"({"name": "x", )", "bad.json");
   std::string error;
   EXPECT_EQ(test::runCommand(kBench + " --config " + (dir / "missing.json").string(), &error), 2);
   EXPECT_NE(error.find("missing.json"), std::string::npos);
-  EXPECT_EQ(test::runCommand(kBench + " --config " + (dir / "bad.json").string() + " --gl vulkan", &error), 2);
-  EXPECT_EQ(test::runCommand(kBench + " --config " + (dir / "bad.json").string() + " --shard 3/2", &error), 2);
+  EXPECT_EQ(test::runCommand(kBench + " --config " + (dir / "bad.json").string() + " --gl vulkan",
+                             &error),
+            2);
+  EXPECT_EQ(test::runCommand(kBench + " --config " + (dir / "bad.json").string() + " --shard 3/2",
+                             &error),
+            2);
 }
 
 TEST(BenchCli, ShardsTogetherMakeTheWholeRun) {
@@ -106,7 +120,8 @@ TEST(BenchCli, ShardsTogetherMakeTheWholeRun) {
   ASSERT_EQ(test::runCommand(base + " --shard 1/2 --out " + (dir / "s1").string()), 0);
   std::multiset<std::string> shards = keysOf(dir / "s0" / "metrics.jsonl");
   for (const auto& key : keysOf(dir / "s1" / "metrics.jsonl")) {
-    if (key.rfind("tree|", 0) != 0 || !shards.contains(key)) shards.insert(key);  // both shards load the tree
+    if (key.rfind("tree|", 0) != 0 || !shards.contains(key))
+      shards.insert(key);  // both shards load the tree
   }
   EXPECT_EQ(shards, keysOf(dir / "all" / "metrics.jsonl"));
 }
@@ -118,8 +133,8 @@ TEST(BenchCli, KilledRunResumesWithoutLosingOrDuplicatingRecords) {
   const pid_t child = ::fork();
   ASSERT_GE(child, 0);
   if (child == 0) {
-    ::execl(kBench.c_str(), kBench.c_str(), "--quiet", "--config", (dir / "tiny.json").c_str(), "--out", out.c_str(),
-            static_cast<char*>(nullptr));
+    ::execl(kBench.c_str(), kBench.c_str(), "--quiet", "--config", (dir / "tiny.json").c_str(),
+            "--out", out.c_str(), static_cast<char*>(nullptr));
     ::_exit(127);
   }
   // Kill -9 once some records exist, in the middle of the run.
@@ -134,7 +149,9 @@ TEST(BenchCli, KilledRunResumesWithoutLosingOrDuplicatingRecords) {
   ::waitpid(child, &status, 0);
   const size_t before = ResultsStore::readRecords(metrics).size();
   ASSERT_GE(before, 10u);
-  ASSERT_EQ(test::runCommand(kBench + " --quiet --config " + (dir / "tiny.json").string() + " --out " + out), 0);
+  ASSERT_EQ(test::runCommand(kBench + " --quiet --config " + (dir / "tiny.json").string() +
+                             " --out " + out),
+            0);
   const auto keys = keysOf(metrics);
   EXPECT_EQ(std::set<std::string>(keys.begin(), keys.end()).size(), keys.size()) << "no duplicates";
   EXPECT_EQ(keys.size(), 1u + 2u * (1u + 48u + 2u)) << "nothing lost";

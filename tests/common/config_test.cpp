@@ -20,19 +20,27 @@ std::string errorOf(const json& config) {
 
 TEST(Config, UnknownKeysAreErrorsNamingTheKey) {
   EXPECT_NE(errorOf({{"name", "x"}, {"method", "polygonal"}}).find("method"), std::string::npos);
-  EXPECT_NE(errorOf({{"name", "x"}, {"views", {{"distance", {2}}}}}).find("views.distance"), std::string::npos);
-  const std::string error = errorOf({{"name", "x"}, {"methods", {{{"method", "polygonal"}, {"params", {{"wod", false}}}}}}});
+  EXPECT_NE(errorOf({{"name", "x"}, {"views", {{"distance", {2}}}}}).find("views.distance"),
+            std::string::npos);
+  const std::string error = errorOf(
+      {{"name", "x"}, {"methods", {{{"method", "polygonal"}, {"params", {{"wod", false}}}}}}});
   EXPECT_NE(error.find("wod"), std::string::npos) << error;
   EXPECT_NE(error.find("polygonal"), std::string::npos) << error;
 }
 
 TEST(Config, OutOfRangeAndWrongTypesAreErrors) {
-  EXPECT_NE(errorOf({{"name", "x"}, {"views", {{"supersample", 0}}}}).find("views.supersample"), std::string::npos);
-  EXPECT_NE(errorOf({{"name", "x"}, {"views", {{"distances", {0.5}}}}}).find("views.distances"), std::string::npos);
-  EXPECT_NE(errorOf({{"name", "x"}, {"views", {{"shading", "pbr"}}}}).find("views.shading"), std::string::npos);
-  EXPECT_NE(errorOf({{"name", "x"}, {"forests", {{"frames", "ten"}}}}).find("forests.frames"), std::string::npos);
-  EXPECT_NE(errorOf({{"name", "x"}, {"methods", {{{"method", "nope"}}}}}).find("nope"), std::string::npos);
-  EXPECT_NE(errorOf({{"name", "x"}, {"trees", {{{"preset", "palm"}}}}}).find("palm"), std::string::npos);
+  EXPECT_NE(errorOf({{"name", "x"}, {"views", {{"supersample", 0}}}}).find("views.supersample"),
+            std::string::npos);
+  EXPECT_NE(errorOf({{"name", "x"}, {"views", {{"distances", {0.5}}}}}).find("views.distances"),
+            std::string::npos);
+  EXPECT_NE(errorOf({{"name", "x"}, {"views", {{"shading", "pbr"}}}}).find("views.shading"),
+            std::string::npos);
+  EXPECT_NE(errorOf({{"name", "x"}, {"forests", {{"frames", "ten"}}}}).find("forests.frames"),
+            std::string::npos);
+  EXPECT_NE(errorOf({{"name", "x"}, {"methods", {{{"method", "nope"}}}}}).find("nope"),
+            std::string::npos);
+  EXPECT_NE(errorOf({{"name", "x"}, {"trees", {{{"preset", "palm"}}}}}).find("palm"),
+            std::string::npos);
   EXPECT_NE(errorOf(json::object()).find("name"), std::string::npos);
 }
 
@@ -42,7 +50,9 @@ TEST(Config, ListsInParamsAreSweeps) {
   EXPECT_EQ(points[0], json({{"a", 1}, {"b", "x"}, {"c", 5}}));
   EXPECT_EQ(points[5], json({{"a", 2}, {"b", "z"}, {"c", 5}}));
   const ExperimentConfig config = parseExperimentConfig(
-      {{"name", "s"}, {"methods", {{{"method", "polygonal"}, {"params", {{"wood", {true, false}}}}}}}}, "");
+      {{"name", "s"},
+       {"methods", {{{"method", "polygonal"}, {"params", {{"wood", {true, false}}}}}}}},
+      "");
   ASSERT_EQ(config.variants.size(), 2u);
   EXPECT_EQ(config.variants[0].label, "polygonal[wood=true]");
   EXPECT_EQ(config.variants[1].label, "polygonal[wood=false]");

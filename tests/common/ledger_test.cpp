@@ -27,8 +27,9 @@ TEST(Ledger, TextureBytesIncludeMipsAndCompression) {
   EXPECT_EQ(textureLevelBytes(GL_RGBA16F, 10, 10, 2), 1600u);
   EXPECT_EQ(fullMipLevelCount(256, 256), 9);
   EXPECT_EQ(fullMipLevelCount(256, 64), 9);
-  EXPECT_EQ(textureLevelBytes(0x83F1 /* DXT1 RGBA */, 256, 256, 1), 32768u);  // 8 bytes per 4×4 block
-  EXPECT_EQ(textureLevelBytes(0x83F3 /* DXT5 */, 6, 6, 1), 64u);              // 2×2 blocks of 16 bytes
+  EXPECT_EQ(textureLevelBytes(0x83F1 /* DXT1 RGBA */, 256, 256, 1),
+            32768u);                                              // 8 bytes per 4×4 block
+  EXPECT_EQ(textureLevelBytes(0x83F3 /* DXT5 */, 6, 6, 1), 64u);  // 2×2 blocks of 16 bytes
 }
 
 TEST(Ledger, DeviceRecordsRealAllocationsAndReleasesThem) {
@@ -38,10 +39,14 @@ TEST(Ledger, DeviceRecordsRealAllocationsAndReleasesThem) {
   {
     Device::OwnerScope owner(device, "method");
     std::vector<float> data(250, 1.0f);
-    Buffer buffer = device.createBuffer(MemoryCategory::kGeometry, GL_ARRAY_BUFFER, data, "vertices");
-    Texture texture = device.createTexture({GL_TEXTURE_2D, 64, 32, 1, GL_RGBA8, true, MemoryCategory::kTexture, "t"});
-    Texture array = device.createTexture({GL_TEXTURE_2D_ARRAY, 16, 16, 3, GL_R32F, false, MemoryCategory::kOther, "a"});
-    // 64×32 RGBA8 with the full chain: 64·32 + 32·16 + 16·8 + 8·4 + 4·2 + 2·1 + 1·1 texels × 4 bytes.
+    Buffer buffer =
+        device.createBuffer(MemoryCategory::kGeometry, GL_ARRAY_BUFFER, data, "vertices");
+    Texture texture = device.createTexture(
+        {GL_TEXTURE_2D, 64, 32, 1, GL_RGBA8, true, MemoryCategory::kTexture, "t"});
+    Texture array = device.createTexture(
+        {GL_TEXTURE_2D_ARRAY, 16, 16, 3, GL_R32F, false, MemoryCategory::kOther, "a"});
+    // 64×32 RGBA8 with the full chain: 64·32 + 32·16 + 16·8 + 8·4 + 4·2 + 2·1 + 1·1 texels × 4
+    // bytes.
     const uint64_t mipChain = (2048 + 512 + 128 + 32 + 8 + 2 + 1) * 4;
     EXPECT_EQ(texture.levels, 7);
     EXPECT_EQ(ledger.totals("method").geometry, 1000u);
@@ -57,12 +62,14 @@ TEST(Shaders, CompileErrorsNameTheFileAndLine) {
   auto context = test::makeTestContext();
   Ledger ledger;
   Device device(ledger);
-  const char* broken = "#version 430 core\nout vec4 c;\nvoid main() {\n  c = vec4(undefinedThing);\n}\n";
+  const char* broken =
+      "#version 430 core\nout vec4 c;\nvoid main() {\n  c = vec4(undefinedThing);\n}\n";
   try {
     device.createProgram({{"methods/x/broken.frag", broken}});
     FAIL() << "expected a compile error";
   } catch (const std::runtime_error& error) {
-    EXPECT_NE(std::string(error.what()).find("methods/x/broken.frag:4"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("methods/x/broken.frag:4"), std::string::npos)
+        << error.what();
   }
 }
 

@@ -13,7 +13,9 @@ namespace {
 // Serialises every field that defines a tree, so "byte-identical" can be checked exactly.
 std::string serialize(const Tree& tree) {
   std::string bytes;
-  auto append = [&](const void* data, size_t size) { bytes.append(static_cast<const char*>(data), size); };
+  auto append = [&](const void* data, size_t size) {
+    bytes.append(static_cast<const char*>(data), size);
+  };
   append(tree.wood.positions.data(), tree.wood.positions.size() * sizeof(glm::vec3));
   append(tree.wood.normals.data(), tree.wood.normals.size() * sizeof(glm::vec3));
   append(tree.wood.indices.data(), tree.wood.indices.size() * sizeof(uint32_t));
@@ -39,7 +41,8 @@ TEST(LSystem, SamePresetAndSeedGiveByteIdenticalTrees) {
 }
 
 TEST(LSystem, DifferentSeedsGiveDifferentTrees) {
-  EXPECT_NE(serialize(generateTree(treePreset("sparse"), 1)), serialize(generateTree(treePreset("sparse"), 2)));
+  EXPECT_NE(serialize(generateTree(treePreset("sparse"), 1)),
+            serialize(generateTree(treePreset("sparse"), 2)));
 }
 
 TEST(LSystem, PresetsHaveTheirLeafCounts) {
@@ -51,7 +54,9 @@ TEST(LSystem, PresetsHaveTheirLeafCounts) {
   EXPECT_EQ(generateTree(scaled, 1).leaves.size(), 12345u);
 }
 
-TEST(LSystem, UnknownPresetIsAnInputError) { EXPECT_THROW(treePreset("palm"), InputError); }
+TEST(LSystem, UnknownPresetIsAnInputError) {
+  EXPECT_THROW(treePreset("palm"), InputError);
+}
 
 class HierarchyInvariants : public testing::TestWithParam<std::string> {};
 
@@ -68,14 +73,17 @@ TEST_P(HierarchyInvariants, EveryBoxContainsItsChildrenAndItsLeaves) {
       ASSERT_GT(child, static_cast<int32_t>(n)) << "nodes are in pre-order";
       EXPECT_EQ(tree.branches[child].parent, static_cast<int32_t>(n));
       EXPECT_EQ(tree.branches[child].level, node.level + 1);
-      EXPECT_TRUE(node.bounds.contains(tree.branches[child].bounds, epsilon)) << "node " << n << " child " << child;
+      EXPECT_TRUE(node.bounds.contains(tree.branches[child].bounds, epsilon))
+          << "node " << n << " child " << child;
       EXPECT_GE(tree.branches[child].leafBegin, node.leafEnd);
       EXPECT_LE(tree.branches[child].subtreeLeafEnd, node.subtreeLeafEnd);
     }
     for (uint32_t l = node.leafBegin; l < node.subtreeLeafEnd; ++l) {
-      for (int c = 0; c < 4; ++c) EXPECT_TRUE(node.bounds.contains(tree.leaves[l].corner(c), epsilon));
+      for (int c = 0; c < 4; ++c)
+        EXPECT_TRUE(node.bounds.contains(tree.leaves[l].corner(c), epsilon));
     }
-    for (uint32_t l = node.leafBegin; l < node.leafEnd; ++l) EXPECT_EQ(tree.leaves[l].branch, static_cast<int32_t>(n));
+    for (uint32_t l = node.leafBegin; l < node.leafEnd; ++l)
+      EXPECT_EQ(tree.leaves[l].branch, static_cast<int32_t>(n));
   }
   // Every leaf belongs to exactly one node's own range: the own ranges tile [0, leaves).
   size_t covered = 0;
@@ -86,7 +94,8 @@ TEST_P(HierarchyInvariants, EveryBoxContainsItsChildrenAndItsLeaves) {
   EXPECT_TRUE(tree.bounds.contains(tree.branches[0].bounds, epsilon));
 }
 
-INSTANTIATE_TEST_SUITE_P(Presets, HierarchyInvariants, testing::Values("broadleaf", "shrub", "sparse"));
+INSTANTIATE_TEST_SUITE_P(Presets, HierarchyInvariants,
+                         testing::Values("broadleaf", "shrub", "sparse"));
 
 TEST(LSystem, PushAndPopCreateOneBoxPerBracketPair) {
   // "F [ F L ] [ F [ F L ] ]": three brackets, so root + 3 boxes, nested as written.
@@ -100,8 +109,20 @@ TEST(LSystem, PushAndPopCreateOneBoxPerBracketPair) {
     x.p[3] = d;
     return x;
   };
-  modules = {m('F', 1, 0.1f), m('['), m('&', 45), m('F', 1, 0.05f), m('L', 1, 40, 0, 0), m(']'),
-             m('['), m('&', -45), m('F', 1, 0.05f), m('['), m('F', 0.5f, 0.02f), m('L', 1, 40, 0, 0), m(']'), m(']')};
+  modules = {m('F', 1, 0.1f),
+             m('['),
+             m('&', 45),
+             m('F', 1, 0.05f),
+             m('L', 1, 40, 0, 0),
+             m(']'),
+             m('['),
+             m('&', -45),
+             m('F', 1, 0.05f),
+             m('['),
+             m('F', 0.5f, 0.02f),
+             m('L', 1, 40, 0, 0),
+             m(']'),
+             m(']')};
   LSystemTreeParams params = treePreset("sparse");
   Tree tree = interpretTreeString(modules, params, 1);
   ASSERT_EQ(tree.branches.size(), 4u);

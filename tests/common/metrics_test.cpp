@@ -91,8 +91,10 @@ namespace {
 
 TEST(ImageIo, PngRoundTripKeepsStraightAlphaExactly) {
   ImageRgba8 image(16, 4);
-  for (size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = static_cast<uint8_t>((i * 53) % 256);
-  const auto path = std::filesystem::temp_directory_path() / ("canopy_png_" + std::to_string(::getpid()) + ".png");
+  for (size_t i = 0; i < image.pixels.size(); ++i)
+    image.pixels[i] = static_cast<uint8_t>((i * 53) % 256);
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("canopy_png_" + std::to_string(::getpid()) + ".png");
   writePng(path, image);
   const ImageRgba8 back = readImage(path);
   std::filesystem::remove(path);

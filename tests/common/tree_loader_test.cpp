@@ -70,7 +70,8 @@ f 12/2 13/3 14/4 15/5
 struct Fixture {
   test::TempDir dir;
   std::filesystem::path obj;
-  Fixture(const std::string& mtl = kBlenderMtl, const std::string& objText = kBlenderObj, bool png = true) {
+  Fixture(const std::string& mtl = kBlenderMtl, const std::string& objText = kBlenderObj,
+          bool png = true) {
     obj = dir / "tree.obj";
     test::writeText(dir / "tree.mtl", mtl);
     test::writeText(obj, objText);
@@ -85,7 +86,7 @@ TEST(TreeLoader, BlenderObjWithLeafTextures) {
   EXPECT_EQ(tree.wood.triangleCount(), 1u);
   ASSERT_EQ(tree.leafTextures.size(), 1u);
   EXPECT_EQ(tree.leafTextures[0].front.width, 8);
-  EXPECT_EQ(tree.leafTextures[0].front.at(0, 0)[3], 0);    // alpha from map_d
+  EXPECT_EQ(tree.leafTextures[0].front.at(0, 0)[3], 0);  // alpha from map_d
   EXPECT_EQ(tree.leafTextures[0].front.at(3, 3)[3], 255);
   for (const Leaf& leaf : tree.leaves) {
     EXPECT_NEAR(leaf.halfExtents.x, 0.1f, 1e-5f);
@@ -107,7 +108,8 @@ TEST(TreeLoader, BlenderObjWithLeafTextures) {
 
 TEST(TreeLoader, ThreeJsObjWithUsemtlPerMeshAndTriangleCards) {
   // OBJExporter style: "o" + "usemtl" per mesh; each card two triangles over four vertices.
-  const std::string mtl = "newmtl branches\nKd 1 1 1\nnewmtl leaves\nKd 1 1 1\nmap_Kd leaf.png\nmap_d leaf.png\n";
+  const std::string mtl =
+      "newmtl branches\nKd 1 1 1\nnewmtl leaves\nKd 1 1 1\nmap_Kd leaf.png\nmap_d leaf.png\n";
   const std::string obj = R"(mtllib tree.mtl
 o branches
 usemtl branches
@@ -195,7 +197,8 @@ TEST(TreeLoader, GltfWithAlphaMaskMaterial) {
   "indices": 2, "material": 0}]}],
   "materials": [{"name": "Mat.001", "alphaMode": "MASK", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
   "textures": [{"source": 0}], "images": [{"uri": "leaf.png"}],
-  "buffers": [{"byteLength": 92, "uri": "data:application/octet-stream;base64,)" + base64(buffer) + R"("}],
+  "buffers": [{"byteLength": 92, "uri": "data:application/octet-stream;base64,)" +
+                           base64(buffer) + R"("}],
   "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 32},
                   {"buffer": 0, "byteOffset": 80, "byteLength": 12}],
   "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [0.4, 0.2, 0]},
@@ -258,7 +261,8 @@ TEST(TreeLoaderBadInput, NonFiniteVertex) {
 }
 
 TEST(TreeLoaderBadInput, ModelWithoutLeaves) {
-  Fixture f("newmtl bark\nKd 1 1 1\n", "mtllib tree.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl bark\nf 1 2 3\n");
+  Fixture f("newmtl bark\nKd 1 1 1\n",
+            "mtllib tree.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl bark\nf 1 2 3\n");
   expectInputError(f.obj, "no leaves");
 }
 
@@ -267,6 +271,40 @@ TEST(TreeLoader, LeafRuleMatchesCommonNames) {
   EXPECT_TRUE(isLeafMaterialName("pine_NEEDLES"));
   EXPECT_TRUE(isLeafMaterialName("Foliage.001"));
   EXPECT_FALSE(isLeafMaterialName("bark"));
+}
+
+}  // namespace
+}  // namespace canopy
+
+#include "common/tree_export.h"
+
+namespace canopy {
+namespace {
+
+TEST(TreeLoader, ExportedBuiltInTreeLoadsBackLeafForLeaf) {
+  test::TempDir dir;
+  Tree tree = test::smallTree(500);
+  tree.name = "small";
+  const auto path = exportTreeObj(tree, dir.path());
+  const Tree loaded = loadTreeFile({path.string()});
+  ASSERT_EQ(loaded.leaves.size(), tree.leaves.size());
+  EXPECT_EQ(loaded.wood.triangleCount(), tree.wood.triangleCount());
+  EXPECT_EQ(loaded.leafTextures.size(), tree.leafTextures.size());
+  // Leaves come back in texture order; compare as sets of centres by matching each one.
+  const float tolerance = 1e-4f * tree.boundingSphereRadius();
+  size_t matched = 0;
+  for (const Leaf& original : tree.leaves) {
+    for (const Leaf& back : loaded.leaves) {
+      if (glm::length(back.center - original.center) < tolerance) {
+        EXPECT_NEAR(std::abs(glm::dot(back.normal, original.normal)), 1.0f, 1e-3f);
+        EXPECT_NEAR(back.halfExtents.x, original.halfExtents.x, tolerance);
+        EXPECT_NEAR(back.halfExtents.y, original.halfExtents.y, tolerance);
+        ++matched;
+        break;
+      }
+    }
+  }
+  EXPECT_EQ(matched, tree.leaves.size());
 }
 
 }  // namespace

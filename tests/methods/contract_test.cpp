@@ -100,7 +100,8 @@ TEST_P(MethodContract, SavedAssetLoadsAndRendersTheSame) {
     loaded->upload(*mDevice);
   }
   EXPECT_EQ(mLedger.totals("loaded").total(), mLedger.totals("original").total());
-  EXPECT_EQ(mHarness->render(*method, camera(tree, 60.0f)), mHarness->render(*loaded, camera(tree, 60.0f)));
+  EXPECT_EQ(mHarness->render(*method, camera(tree, 60.0f)),
+            mHarness->render(*loaded, camera(tree, 60.0f)));
 }
 
 TEST_P(MethodContract, DrawsForestsWithoutGlErrors) {
@@ -115,13 +116,17 @@ TEST_P(MethodContract, DrawsForestsWithoutGlErrors) {
   EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
 }
 
-INSTANTIATE_TEST_SUITE_P(EveryRegisteredMethod, MethodContract, testing::ValuesIn(builtinMethods().names()),
-                         [](const testing::TestParamInfo<std::string>& info) { return info.param; });
+INSTANTIATE_TEST_SUITE_P(EveryRegisteredMethod, MethodContract,
+                         testing::ValuesIn(builtinMethods().names()),
+                         [](const testing::TestParamInfo<std::string>& info) {
+                           return info.param;
+                         });
 
 TEST(Harness, FrameTimeStatistics) {
-  const FrameTimes times = summarizeFrameTimes({5, 1, 3, 2, 4, 100, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19});
-  EXPECT_DOUBLE_EQ(times.medianMs, 10.5);   // even count: mean of the two middle values
-  EXPECT_DOUBLE_EQ(times.p95Ms, 19.0);      // nearest rank: ceil(0.95·20) = 19th of 20
+  const FrameTimes times =
+      summarizeFrameTimes({5, 1, 3, 2, 4, 100, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19});
+  EXPECT_DOUBLE_EQ(times.medianMs, 10.5);  // even count: mean of the two middle values
+  EXPECT_DOUBLE_EQ(times.p95Ms, 19.0);     // nearest rank: ceil(0.95·20) = 19th of 20
   EXPECT_EQ(times.frames, 20);
 }
 
