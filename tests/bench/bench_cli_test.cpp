@@ -159,3 +159,42 @@ TEST(BenchCli, KilledRunResumesWithoutLosingOrDuplicatingRecords) {
 
 }  // namespace
 }  // namespace canopy
+
+namespace canopy {
+namespace {
+
+// Bad tree files named in a config: exit code 2 and one line naming the file.
+TEST(BenchCli, BadTreeFilesExitWithCode2NamingTheFile) {
+  test::TempDir dir;
+  const std::string mtl = "newmtl bark\nKd 1 1 1\nnewmtl leaf\nmap_Kd leaf.png\nmap_d leaf.png\n";
+  const std::string obj =
+      "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\n"
+      "usemtl bark\nf 1 2 3\nusemtl leaf\nf 1/1 2/2 4/3\n";
+  const auto expectBadTree = [&](const std::string& name, const std::string& objText,
+                                 bool writeTexture, const std::string& words) {
+    const auto folder = dir / name;
+    test::writeText(folder / "m.mtl", mtl);
+    test::writeText(folder / "tree.obj", objText);
+    if (writeTexture) test::writeText(folder / "leaf.png", "not an image");
+    test::writeText(folder / "c.json", R"({"name": "x", "trees": [{"file": ")" +
+                                           (folder / "tree.obj").string() +
+                                           R"("}], "methods": [{"method": "polygonal"}]})");
+    std::string error;
+    EXPECT_EQ(test::runCommand(kBench + " --quiet --config " + (folder / "c.json").string() +
+                                   " --out " + (folder / "out").string(),
+                               &error),
+              2)
+        << name;
+    EXPECT_NE(error.find(words), std::string::npos) << name << ": " << error;
+    EXPECT_EQ(std::count(error.begin(), error.end(), '\n'), 1) << error;
+  };
+  expectBadTree("missing_texture", obj, false, "leaf.png");
+  expectBadTree("not_an_image", obj, true, "leaf.png");
+  std::string nan = obj;
+  nan.replace(nan.find("v 1 0 0"), 7, "v nan 0 0");
+  expectBadTree("non_finite", nan, false, "not finite");
+  expectBadTree("garbage", "\x01\x02\x03 garbage \xff", false, "tree.obj");
+}
+
+}  // namespace
+}  // namespace canopy

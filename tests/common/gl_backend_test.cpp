@@ -82,6 +82,16 @@ TEST(GlBackend, OsMesaAndEglCoexistInOneProcess) {
   expectTriangle(renderTriangle(*osmesa));
 }
 
+// Runs where a display exists; ctest runs it under xvfb-run (tests/CMakeLists.txt).
+TEST(GlBackend, GlfwRendersKnownTriangle) {
+  const char* display = std::getenv("DISPLAY");
+  if (display == nullptr || *display == '\0')
+    GTEST_SKIP() << "no display (ctest runs this under xvfb-run)";
+  auto context = createContext({Backend::kGlfw});
+  EXPECT_FALSE(context->renderer().empty());
+  expectTriangle(renderTriangle(*context));
+}
+
 TEST(GlBackend, GlfwWithoutDisplayIsAClearInputError) {
   const char* display = std::getenv("DISPLAY");
   if (display != nullptr && *display != '\0') GTEST_SKIP() << "a display is present";
