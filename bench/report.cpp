@@ -71,6 +71,22 @@ double jsonNumber(const nlohmann::json* record, const char* key) {
   return (*record)[key].get<double>();
 }
 
+// "| a | b | c1 | c2 |\n|---|---|--:|--:|\n": text columns, then right-aligned numbers.
+std::string markdownHeader(const std::vector<std::string>& textColumns,
+                           const std::vector<std::string>& numberColumns) {
+  std::string header = "|", rule = "|";
+  for (const std::string& c : textColumns) header += " " + c + " |", rule += "---|";
+  for (const std::string& c : numberColumns) header += " " + c + " |", rule += "--:|";
+  return header + "\n" + rule + "\n";
+}
+
+template <typename T>
+std::vector<std::string> labels(const std::vector<T>& keys, const char* format) {
+  std::vector<std::string> result;
+  for (const T& key : keys) result.push_back(fmt::format(fmt::runtime(format), key));
+  return result;
+}
+
 }  // namespace
 
 std::vector<SummaryRow> summarize(const std::vector<nlohmann::json>& records) {
@@ -184,13 +200,10 @@ std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std
       "# {}\n\nRenderer: `{}`. PSNR in dB over the union of coverage masks "
       "(capped at 100 dB for identical images); memory from the GPU ledger.\n\n",
       title, renderer);
-  out +=
-      "## Quality, memory and bake\n\n| tree | method | bake s | memory MB | disk MB | PSNR | SSIM "
-      "| coverage err |";
-  for (double d : distances) out += fmt::format(" PSNR @{:g}r |", d);
-  out += "\n|---|---|--:|--:|--:|--:|--:|--:|";
-  for (size_t i = 0; i < distances.size(); ++i) out += "--:|";
-  out += "\n";
+  std::vector<std::string> quality = {"bake s", "memory MB", "disk MB",
+                                      "PSNR",   "SSIM",      "coverage err"};
+  for (const std::string& label : labels(distances, "PSNR @{:g}r")) quality.push_back(label);
+  out += "## Quality, memory and bake\n\n" + markdownHeader({"tree", "method"}, quality);
   for (const SummaryRow& row : rows) {
     const nlohmann::json* bake = row.bake.is_object() ? &row.bake : nullptr;
     const double memory =
@@ -203,11 +216,8 @@ std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std
     out += "\n";
   }
   if (!elevations.empty()) {
-    out += "\n## PSNR by elevation\n\n| tree | method |";
-    for (double e : elevations) out += fmt::format(" {:g}° |", e);
-    out += "\n|---|---|";
-    for (size_t i = 0; i < elevations.size(); ++i) out += "--:|";
-    out += "\n";
+    out += "\n## PSNR by elevation\n\n" +
+           markdownHeader({"tree", "method"}, labels(elevations, "{:g}°"));
     for (const SummaryRow& row : rows) {
       out += fmt::format("| {} | {} |", row.tree, row.variant);
       for (double e : elevations) out += " " + number(lookup(row.psnrByElevation, e), 2) + " |";
@@ -215,13 +225,8 @@ std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std
     }
   }
   if (!sizes.empty()) {
-    out +=
-        "\n## Frame time by forest size (median ms / FPS / speedup vs polygonal, same run)\n\n| "
-        "tree | method |";
-    for (int n : sizes) out += fmt::format(" {} trees |", n);
-    out += "\n|---|---|";
-    for (size_t i = 0; i < sizes.size(); ++i) out += "--:|";
-    out += "\n";
+    out += "\n## Frame time by forest size (median ms / FPS / speedup vs polygonal, same run)\n\n" +
+           markdownHeader({"tree", "method"}, labels(sizes, "{} trees"));
     for (const SummaryRow& row : rows) {
       out += fmt::format("| {} | {} |", row.tree, row.variant);
       for (int n : sizes) {

@@ -14,42 +14,32 @@ namespace {
 
 constexpr float kDegToRad = 3.14159265358979f / 180.0f;
 
-Module makeModule(char symbol, float a = 0, float b = 0, float c = 0, float d = 0) {
-  Module m;
-  m.symbol = symbol;
-  m.p[0] = a;
-  m.p[1] = b;
-  m.p[2] = c;
-  m.p[3] = d;
-  return m;
-}
-
 // The apex production: an internode, a lateral apex in brackets (while the order allows), and
 // the continuing apex rolled by the divergence angle.
 void rewriteApex(const Module& apex, const LSystemTreeParams& params, Random& random,
                  std::vector<Module>& out) {
   const float length = apex.p[0], radius = apex.p[1];
   const int order = static_cast<int>(apex.p[2]);
-  out.push_back(makeModule('F', length, radius, float(order)));
+  out.push_back(Module::make('F', length, radius, float(order)));
   if (order < params.maxOrder) {
     // Order-0 axes bear `trunkLaterals` laterals per internode, spread around; others bear one.
     const int laterals = order == 0 ? params.trunkLaterals : 1;
     for (int i = 0; i < laterals; ++i) {
       const float pitch = params.branchAngle + random.uniform(-1, 1) * params.angleJitter;
-      out.push_back(makeModule('['));
-      out.push_back(makeModule(
+      out.push_back(Module::make('['));
+      out.push_back(Module::make(
           '/', 360.0f * float(i) / float(laterals) + random.uniform(-1, 1) * params.angleJitter));
-      out.push_back(makeModule('&', pitch));
-      out.push_back(makeModule('A', length * params.lateralLengthRatio, radius * params.radiusRatio,
-                               float(order + 1)));
-      out.push_back(makeModule(']'));
+      out.push_back(Module::make('&', pitch));
+      out.push_back(Module::make('A', length * params.lateralLengthRatio,
+                                 radius * params.radiusRatio, float(order + 1)));
+      out.push_back(Module::make(']'));
     }
   }
-  out.push_back(makeModule('/', params.divergence + random.uniform(-1, 1) * params.angleJitter));
+  out.push_back(Module::make('/', params.divergence + random.uniform(-1, 1) * params.angleJitter));
   // A small random turn keeps axes from being perfectly straight.
-  out.push_back(makeModule('+', random.uniform(-1, 1) * params.angleJitter * 0.5f));
-  out.push_back(makeModule('A', length * params.mainLengthRatio, radius * params.mainRadiusRatio,
-                           float(order)));
+  out.push_back(Module::make('+', random.uniform(-1, 1) * params.angleJitter * 0.5f));
+  out.push_back(Module::make('A', length * params.mainLengthRatio, radius * params.mainRadiusRatio,
+                             float(order)));
 }
 
 // Distributes exactly params.leaves leaves along the segments of order >= leafOrder, in
@@ -80,7 +70,7 @@ std::vector<Module> distributeLeaves(const std::vector<Module>& modules,
       const float scale = 1.0f + random.uniform(-1, 1) * params.leafSizeJitter;
       const float pitch = params.leafPitch + random.uniform(-1, 1) * 20.0f;
       const float roll = float(placed + j) * 137.5f + random.uniform(-1, 1) * 25.0f;
-      out.push_back(makeModule('L', scale, pitch, roll, back));
+      out.push_back(Module::make('L', scale, pitch, roll, back));
     }
     placed = target;
   }
@@ -258,17 +248,17 @@ std::vector<Module> deriveTreeString(const LSystemTreeParams& params, uint64_t s
   std::vector<Module> modules;
   const float firstRadius = params.trunkRadius * params.mainRadiusRatio;
   if (params.stems == 1) {
-    modules.push_back(makeModule('F', params.boleLength, params.trunkRadius, 0.0f));
-    modules.push_back(makeModule('A', params.trunkLength, firstRadius, 0.0f));
+    modules.push_back(Module::make('F', params.boleLength, params.trunkRadius, 0.0f));
+    modules.push_back(Module::make('A', params.trunkLength, firstRadius, 0.0f));
   } else {
     for (int s = 0; s < params.stems; ++s) {
-      modules.push_back(makeModule('['));
+      modules.push_back(Module::make('['));
       modules.push_back(
-          makeModule('/', 360.0f * float(s) / float(params.stems) + random.uniform(-15, 15)));
-      modules.push_back(makeModule('&', params.stemSpread + random.uniform(-8, 8)));
-      modules.push_back(makeModule('F', params.boleLength, params.trunkRadius, 0.0f));
-      modules.push_back(makeModule('A', params.trunkLength, firstRadius, 0.0f));
-      modules.push_back(makeModule(']'));
+          Module::make('/', 360.0f * float(s) / float(params.stems) + random.uniform(-15, 15)));
+      modules.push_back(Module::make('&', params.stemSpread + random.uniform(-8, 8)));
+      modules.push_back(Module::make('F', params.boleLength, params.trunkRadius, 0.0f));
+      modules.push_back(Module::make('A', params.trunkLength, firstRadius, 0.0f));
+      modules.push_back(Module::make(']'));
     }
   }
   for (int step = 0; step < params.iterations; ++step) {

@@ -17,6 +17,10 @@ namespace canopy {
 struct Module {
   char symbol = 0;
   float p[4] = {0, 0, 0, 0};
+
+  static Module make(char symbol, float a = 0, float b = 0, float c = 0, float d = 0) {
+    return Module{symbol, {a, b, c, d}};
+  }
 };
 
 // The parameters of the built-in broadleaf-style grammar. Presets are values of this struct.

@@ -24,39 +24,37 @@ std::vector<double> lumaOf(const ImageRgba8& image) {
   return luma;
 }
 
-// Separable Gaussian blur with the window clipped and renormalised at the image border.
-std::vector<double> gaussianBlur(const std::vector<double>& input, int width, int height) {
+// One pass of the 11-tap Gaussian (σ = 1.5) along x (step 1) or y (step width), with the window
+// clipped and renormalised at the image border.
+std::vector<double> gaussianPass(const std::vector<double>& input, int width, int height,
+                                 bool alongY) {
   constexpr int kRadius = 5;
   constexpr double kSigma = 1.5;
   double weights[2 * kRadius + 1];
-  for (int i = -kRadius; i <= kRadius; ++i)
+  for (int i = -kRadius; i <= kRadius; ++i) {
     weights[i + kRadius] = std::exp(-double(i * i) / (2 * kSigma * kSigma));
-  std::vector<double> temporary(input.size()), output(input.size());
-  for (int y = 0; y < height; ++y) {
-    for (int x = 0; x < width; ++x) {
-      double sum = 0, norm = 0;
-      for (int k = -kRadius; k <= kRadius; ++k) {
-        const int xx = x + k;
-        if (xx < 0 || xx >= width) continue;
-        sum += weights[k + kRadius] * input[size_t(y) * width + xx];
-        norm += weights[k + kRadius];
-      }
-      temporary[size_t(y) * width + x] = sum / norm;
-    }
   }
+  std::vector<double> output(input.size());
+  const int length = alongY ? height : width;
+  const size_t step = alongY ? size_t(width) : 1;
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
+      const int position = alongY ? y : x;
+      const size_t centre = size_t(y) * width + x;
       double sum = 0, norm = 0;
       for (int k = -kRadius; k <= kRadius; ++k) {
-        const int yy = y + k;
-        if (yy < 0 || yy >= height) continue;
-        sum += weights[k + kRadius] * temporary[size_t(yy) * width + x];
+        if (position + k < 0 || position + k >= length) continue;
+        sum += weights[k + kRadius] * input[centre + k * static_cast<std::ptrdiff_t>(step)];
         norm += weights[k + kRadius];
       }
-      output[size_t(y) * width + x] = sum / norm;
+      output[centre] = sum / norm;
     }
   }
   return output;
+}
+
+std::vector<double> gaussianBlur(const std::vector<double>& input, int width, int height) {
+  return gaussianPass(gaussianPass(input, width, height, false), width, height, true);
 }
 
 }  // namespace

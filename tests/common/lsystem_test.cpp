@@ -100,14 +100,8 @@ INSTANTIATE_TEST_SUITE_P(Presets, HierarchyInvariants,
 TEST(LSystem, PushAndPopCreateOneBoxPerBracketPair) {
   // "F [ F L ] [ F [ F L ] ]": three brackets, so root + 3 boxes, nested as written.
   std::vector<Module> modules;
-  auto m = [](char s, float a = 0, float b = 0, float c = 0, float d = 0) {
-    Module x;
-    x.symbol = s;
-    x.p[0] = a;
-    x.p[1] = b;
-    x.p[2] = c;
-    x.p[3] = d;
-    return x;
+  const auto m = [](char s, float a = 0, float b = 0, float c = 0, float d = 0) {
+    return Module::make(s, a, b, c, d);
   };
   modules = {m('F', 1, 0.1f),
              m('['),
