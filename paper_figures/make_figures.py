@@ -31,6 +31,27 @@ def series(row, prefix):
     return sorted(points)
 
 
+def plot_per_tree(rows, trees, prefix, xlabel, ylabel, log_y, path):
+    """One panel per tree, one line per method variant, x from the column suffix (log scale)."""
+    fig, axes = plt.subplots(1, len(trees), figsize=(4.2 * len(trees), 3.6), squeeze=False)
+    for axis, tree in zip(axes[0], trees):
+        for row in (r for r in rows if r["tree"] == tree):
+            points = series(row, prefix)
+            if points:
+                axis.plot([p[0] for p in points], [p[1] for p in points], marker="o", label=row["variant"])
+        axis.set_xscale("log")
+        if log_y:
+            axis.set_yscale("log")
+        axis.set_xlabel(xlabel)
+        axis.set_ylabel(ylabel)
+        axis.set_title(tree)
+        axis.grid(True, which="both", alpha=0.3)
+        axis.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+
+
 def make_figures(run_dir: Path, out_root: Path):
     summary = run_dir / "summary.csv"
     meta_path = run_dir / "meta.json"
@@ -43,38 +64,10 @@ def make_figures(run_dir: Path, out_root: Path):
     renderer = meta.get("gl", {}).get("renderer", "unknown")
     trees = sorted({row["tree"] for row in rows})
 
-    fig, axes = plt.subplots(1, len(trees), figsize=(4.2 * len(trees), 3.6), squeeze=False)
-    for axis, tree in zip(axes[0], trees):
-        for row in (r for r in rows if r["tree"] == tree):
-            points = series(row, "fps_n")
-            if points:
-                axis.plot([p[0] for p in points], [p[1] for p in points], marker="o", label=row["variant"])
-        axis.set_xscale("log")
-        axis.set_yscale("log")
-        axis.set_xlabel("trees in the forest")
-        axis.set_ylabel("FPS (median frame time)")
-        axis.set_title(tree)
-        axis.grid(True, which="both", alpha=0.3)
-        axis.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(out / "fps_vs_trees.png", dpi=150)
-    plt.close(fig)
-
-    fig, axes = plt.subplots(1, len(trees), figsize=(4.2 * len(trees), 3.6), squeeze=False)
-    for axis, tree in zip(axes[0], trees):
-        for row in (r for r in rows if r["tree"] == tree):
-            points = series(row, "psnr_d")
-            if points:
-                axis.plot([p[0] for p in points], [p[1] for p in points], marker="o", label=row["variant"])
-        axis.set_xscale("log")
-        axis.set_xlabel("camera distance (bounding radii)")
-        axis.set_ylabel("PSNR over coverage union (dB)")
-        axis.set_title(tree)
-        axis.grid(True, alpha=0.3)
-        axis.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(out / "psnr_vs_distance.png", dpi=150)
-    plt.close(fig)
+    plot_per_tree(rows, trees, "fps_n", "trees in the forest", "FPS (median frame time)", True,
+                  out / "fps_vs_trees.png")
+    plot_per_tree(rows, trees, "psnr_d", "camera distance (bounding radii)", "PSNR over coverage union (dB)",
+                  False, out / "psnr_vs_distance.png")
 
     caption = (
         f"# Figures of run `{run_dir.name}`\n\n"
