@@ -71,7 +71,8 @@ BakedMethod bakeMethod(const MethodVariant& variant, const Tree& tree, gl::Devic
                   {"bake_peak_rss_scope", peakReset ? "bake" : "process"},
                   {"memory_bytes", gl::toJson(device.ledger().totals(variant.label))},
                   {"disk_bytes", saveAsset ? nlohmann::json(diskBytes) : nlohmann::json()},
-                  {"params", baked.method->effectiveParams()}};
+                  {"params", baked.method->effectiveParams()},
+                  {"report", baked.method->bakeReport()}};
   return baked;
 }
 

@@ -42,13 +42,14 @@ uint64_t AssetFolder::sizeOnDisk() const {
   return total;
 }
 
-void bindInstanceMatrices(GLuint instanceBuffer, GLuint location) {
+void bindInstanceMatrices(GLuint instanceBuffer, GLuint location, GLint firstInstance) {
   const gl::Api& g = gl::api();
   g.BindBuffer(GL_ARRAY_BUFFER, instanceBuffer);
   for (GLuint column = 0; column < 4; ++column) {
     g.EnableVertexAttribArray(location + column);
-    g.VertexAttribPointer(location + column, 4, GL_FLOAT, GL_FALSE, sizeof(float) * 16,
-                          reinterpret_cast<const void*>(sizeof(float) * 4 * column));
+    g.VertexAttribPointer(
+        location + column, 4, GL_FLOAT, GL_FALSE, sizeof(float) * 16,
+        reinterpret_cast<const void*>(sizeof(float) * (16 * size_t(firstInstance) + 4 * column)));
     g.VertexAttribDivisor(location + column, 1);
   }
   g.BindBuffer(GL_ARRAY_BUFFER, 0);

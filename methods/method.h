@@ -43,6 +43,7 @@ struct FrameContext {
   glm::vec3 lightDirection{0.3f, 0.8f, 0.5f};  // unit, towards the light (world space)
   float ambient = 0.35f;                       // ambient term of the lit shading
   GLuint instanceBuffer = 0;
+  int forcedLevel = -1;  // >= 0: every method with levels of detail draws this level
 };
 
 // A baked impostor written to disk: a folder with asset.json (header) and binary blobs/images.
@@ -90,6 +91,9 @@ class Method {
   virtual void draw(const FrameContext& frame, std::span<const Instance> instances) = 0;
   // The parameters the bake really used, in the config's key names.
   virtual nlohmann::json effectiveParams() const = 0;
+  // Facts about the baked representation worth a table column (cluster counts, fit errors,
+  // texture sizes); added to the bake record as "report".
+  virtual nlohmann::json bakeReport() const { return nlohmann::json::object(); }
   // The baked representation, so bake and render can run apart.
   virtual void save(AssetFolder& asset) const = 0;
   virtual void load(AssetFolder& asset) = 0;
@@ -119,8 +123,8 @@ class MethodRegistry {
 // The registry of every built-in method, filled by registry.cpp (one explicit call each).
 const MethodRegistry& builtinMethods();
 
-// Binds frame.instanceBuffer as four vec4 attributes (a mat4) starting at `location`, one per
-// instance, on the currently bound vertex array.
-void bindInstanceMatrices(GLuint instanceBuffer, GLuint location);
+// Binds `instanceBuffer` as four vec4 attributes (a mat4) starting at `location`, one per
+// instance from `firstInstance` on, on the currently bound vertex array.
+void bindInstanceMatrices(GLuint instanceBuffer, GLuint location, GLint firstInstance = 0);
 
 }  // namespace canopy

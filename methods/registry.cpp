@@ -1,5 +1,6 @@
 #include <algorithm>
 
+#include "methods/billboard_cloud/billboard_cloud.h"
 #include "methods/method.h"
 #include "methods/polygonal/polygonal.h"
 
@@ -32,6 +33,7 @@ const MethodRegistry& builtinMethods() {
     MethodRegistry r;
     // One explicit registration per method, in the order reports list them.
     registerPolygonal(r);
+    registerBillboardCloud(r);
     return r;
   }();
   return registry;

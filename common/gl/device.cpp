@@ -121,6 +121,18 @@ void Device::uploadTextureLayer(Texture& texture, int layer, GLenum format, GLen
   checkError("uploadTextureLayer");
 }
 
+void Device::uploadTextureLevel(Texture& texture, int level, GLenum format, GLenum type,
+                                const void* pixels) {
+  const Api& g = api();
+  const TextureDesc& d = texture.desc;
+  const int w = std::max(1, d.width >> level), h = std::max(1, d.height >> level);
+  g.BindTexture(d.target, texture.id());
+  g.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  g.TexSubImage2D(d.target, level, 0, 0, w, h, format, type, pixels);
+  g.BindTexture(d.target, 0);
+  checkError("uploadTextureLevel");
+}
+
 void Device::generateMipmaps(Texture& texture) {
   const Api& g = api();
   g.BindTexture(texture.desc.target, texture.id());

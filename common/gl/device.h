@@ -172,6 +172,9 @@ class Device {
   void uploadTextureLayer(Texture& texture, int layer, GLenum format, GLenum type,
                           const void* pixels);
   void generateMipmaps(Texture& texture);
+  // Uploads one mip level of a 2D texture (levels made on the CPU, e.g. coverage-preserving).
+  void uploadTextureLevel(Texture& texture, int level, GLenum format, GLenum type,
+                          const void* pixels);
 
   RenderTarget createRenderTarget(int width, int height, GLenum colorFormat);
 

@@ -53,17 +53,47 @@ class MethodContract : public testing::TestWithParam<std::string> {
   std::unique_ptr<Harness> mHarness;
 };
 
+// The reference's coverage of the same view, for comparison.
+ImageRgba8 referenceImage(Harness& harness, gl::Device& device, const Tree& tree,
+                          const Camera& camera) {
+  auto reference = builtinMethods().find("polygonal").create(nlohmann::json::object(), "reference");
+  BakeContext context;
+  reference->bake(tree, context);
+  gl::Device::OwnerScope scope(device, "reference");
+  reference->upload(device);
+  return harness.render(*reference, camera);
+}
+
 TEST_P(MethodContract, BakesUploadsThroughTheLedgerAndRendersTheTree) {
   const Tree tree = test::smallTree();
   auto method = bakeAndUpload(tree, "m");
   EXPECT_GT(mLedger.totals("m").total(), 0u);
   EXPECT_EQ(mLedger.totals("unowned").total(), 0u) << "every allocation has an owner";
-  const ImageRgba8 image = mHarness->render(*method, camera(tree));
+  const ImageRgba8 image = mHarness->render(*method, camera(tree, 45.0f));
   EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
-  // The tree fills a good part of a 96² view at three radii, and not all of it.
-  const long covered = coveredPixels(image);
-  EXPECT_GT(covered, 96 * 96 / 50);
-  EXPECT_LT(covered, 96 * 96);
+  // The method draws the tree where the reference does: a good share of its coverage, and
+  // nothing far outside the reference's bounding box.
+  const ImageRgba8 reference = referenceImage(*mHarness, *mDevice, tree, camera(tree, 45.0f));
+  const long covered = coveredPixels(image), expected = coveredPixels(reference);
+  ASSERT_GT(expected, 96 * 96 / 50);
+  EXPECT_GT(covered, expected / 4)
+      << "method " << covered << " px, reference " << expected << " px";
+  EXPECT_LT(covered, expected * 2);
+  int x0 = 96, y0 = 96, x1 = -1, y1 = -1;
+  for (int y = 0; y < 96; ++y) {
+    for (int x = 0; x < 96; ++x) {
+      if (reference.at(x, y)[3] > 0)
+        x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x), y1 = std::max(y1, y);
+    }
+  }
+  long outside = 0;
+  for (int y = 0; y < 96; ++y) {
+    for (int x = 0; x < 96; ++x) {
+      const bool inBox = x >= x0 - 4 && x <= x1 + 4 && y >= y0 - 4 && y <= y1 + 4;
+      outside += image.at(x, y)[3] > 0 && !inBox;
+    }
+  }
+  EXPECT_LT(outside, covered / 50 + 1);
   method.reset();
   EXPECT_EQ(mLedger.totals("m").total(), 0u) << "resources released with the method";
 }

@@ -1,5 +1,5 @@
 #version 430 core
-// Shared by wood and leaves: world transform per instance, normal to world space.
+// Position, normal, uv meshes drawn per instance (wood, polygonal leaves, billboards).
 layout(location = 0) in vec3 inPosition;
 layout(location = 1) in vec3 inNormal;
 layout(location = 2) in vec2 inUv;

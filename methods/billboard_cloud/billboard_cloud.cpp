@@ -1,0 +1,233 @@
+#include "methods/billboard_cloud/billboard_cloud.h"
+
+#include <tbb/parallel_for.h>
+
+#include <spdlog/spdlog.h>
+
+#include "common/config.h"
+#include "methods/common/billboard_cloud.h"
+#include "methods/common/cloud_params.h"
+#include "methods/common/leaf_capture.h"
+#include "methods/common/lod_instances.h"
+#include "methods/common/mesh.h"
+#include "methods/common/mipmaps.h"
+
+namespace canopy {
+namespace {
+
+struct BillboardCloudParams {
+  CloudParams cloud;
+  float density = 32.0f;          // texels per unit length of billboard (the memory knob)
+  int supersample = 4;            // capture samples per texel side
+  int maxBillboardTexels = 1024;  // cap on one billboard's texture side
+  bool mipmaps = true;            // mipmapped atlas (trilinear, coverage-preserving levels)
+  bool drawWood = true;           // draw the trunk and branches as geometry
+
+  template <class Visitor>
+  void visit(Visitor& v) {
+    cloud.visit(v);
+    v("density", density, 0.01f, 100000.0f);
+    v("supersample", supersample, 1, 8);
+    v("max_billboard_texels", maxBillboardTexels, 1, 8192);
+    v("mipmaps", mipmaps);
+    v("wood", drawWood);
+  }
+};
+
+constexpr int kAtlasPadding = 4;
+constexpr int kAtlasAlignment = 8;
+
+class BillboardCloudMethod final : public Method {
+ public:
+  explicit BillboardCloudMethod(BillboardCloudParams params) : mParams(params) {
+    mParams.cloud.validate("billboard_cloud");
+  }
+
+  void bake(const Tree& tree, BakeContext& ctx) override {
+    mTreeBounds = tree.bounds;
+    mWood.bake(tree);
+    const std::vector<BillboardCloud> clouds = buildBillboardCloudFamily(
+        tree, mParams.cloud.clustering, mParams.cloud.divisors(), ctx.seed);
+    mReport = {{"clouds", describeClouds(clouds)}};
+    // Texture size of every billboard at the requested density.
+    std::vector<const Billboard*> billboards;
+    std::vector<glm::ivec2> sizes;
+    mLevelRanges.clear();
+    for (const BillboardCloud& cloud : clouds) {
+      mLevelRanges.push_back({static_cast<uint32_t>(billboards.size() * 6),
+                              static_cast<uint32_t>(cloud.billboards.size() * 6)});
+      for (const Billboard& billboard : cloud.billboards) {
+        billboards.push_back(&billboard);
+        const auto texels = [&](float halfExtent) {
+          return std::clamp(static_cast<int>(std::ceil(2.0f * halfExtent * mParams.density)), 1,
+                            mParams.maxBillboardTexels);
+        };
+        sizes.push_back({texels(billboard.halfExtents.x), texels(billboard.halfExtents.y)});
+      }
+    }
+    const AtlasLayout layout = packAtlas(sizes, kAtlasPadding, kAtlasAlignment);
+    if (layout.width > kMaxAtlas || layout.height > kMaxAtlas) {
+      throwInputError(
+          "billboard_cloud: parameter 'density' = {} needs a {}x{} atlas, above {}; lower it",
+          mParams.density, layout.width, layout.height, kMaxAtlas);
+    }
+    const LeafImageSampler sampler(tree);
+    std::vector<ImageRgba8> images(billboards.size());
+    tbb::parallel_for(size_t(0), billboards.size(), [&](size_t i) {
+      images[i] = captureLeavesOrthographic(tree, sampler, billboards[i]->leaves, *billboards[i],
+                                            sizes[i].x, sizes[i].y, mParams.supersample);
+    });
+    mAtlas = ImageRgba8(layout.width, layout.height);
+    for (size_t i = 0; i < images.size(); ++i) {
+      for (int y = 0; y < sizes[i].y; ++y) {
+        std::copy_n(images[i].at(0, y), size_t(sizes[i].x) * 4,
+                    mAtlas.at(layout.origins[i].x, layout.origins[i].y + y));
+      }
+    }
+    dilateTransparentColors(mAtlas, kAtlasAlignment);
+    mVertices.clear();
+    mIndices.clear();
+    for (size_t i = 0; i < billboards.size(); ++i) {
+      const Billboard& billboard = *billboards[i];
+      const auto base = static_cast<uint32_t>(mVertices.size());
+      static constexpr int kU[4] = {0, 1, 1, 0}, kV[4] = {0, 0, 1, 1};
+      for (int c = 0; c < 4; ++c) {
+        const glm::vec2 texel =
+            glm::vec2(layout.origins[i]) + glm::vec2(kU[c] * sizes[i].x, kV[c] * sizes[i].y);
+        mVertices.push_back({billboard.corner(c), billboard.normal,
+                             texel / glm::vec2(layout.width, layout.height)});
+      }
+      for (uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) mIndices.push_back(base + k);
+    }
+    mReport["atlas"] = {layout.width, layout.height};
+  }
+
+  void upload(gl::Device& device) override {
+    using gl::MemoryCategory;
+    mVbo = device.createBuffer(MemoryCategory::kGeometry, GL_ARRAY_BUFFER, mVertices,
+                               "billboard vertices");
+    mIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mIndices,
+                               "billboard indices");
+    mAtlasTexture =
+        device.createTexture({GL_TEXTURE_2D, mAtlas.width, mAtlas.height, 1, GL_SRGB8_ALPHA8,
+                              mParams.mipmaps, MemoryCategory::kTexture, "billboard atlas"});
+    if (mParams.mipmaps) {
+      const std::vector<ImageRgba8> levels = buildCoveragePreservingMips(mAtlas);
+      for (size_t level = 0; level < levels.size(); ++level) {
+        device.uploadTextureLevel(mAtlasTexture, static_cast<int>(level), GL_RGBA, GL_UNSIGNED_BYTE,
+                                  levels[level].pixels.data());
+      }
+    } else {
+      device.uploadTexture(mAtlasTexture, GL_RGBA, GL_UNSIGNED_BYTE, mAtlas.pixels.data());
+    }
+    gl::setTextureSampling(mAtlasTexture, true, false);
+    mVao = makeMeshVertexArray(mVbo, mIbo);
+    mProgram =
+        device.createProgram({gl::embeddedShader("methods/billboard_cloud/billboard_cloud.vert"),
+                              gl::embeddedShader("methods/billboard_cloud/billboard_cloud.frag")});
+    mLod.attach(device, device.owner() + "/frame");
+    if (mParams.drawWood) mWood.upload(device, true);
+  }
+
+  void draw(const FrameContext& frame, std::span<const Instance> instances) override {
+    if (instances.empty()) return;
+    mLod.update(frame, instances, mTreeBounds, mParams.cloud.thresholds());
+    const gl::Api& g = gl::api();
+    mProgram.use();
+    setFrameUniforms(mProgram, frame);
+    mProgram.set("uAtlas", 0);
+    g.ActiveTexture(GL_TEXTURE0);
+    g.BindTexture(GL_TEXTURE_2D, mAtlasTexture.id());
+    g.BindVertexArray(mVao.id());
+    const auto& ranges = mLod.ranges();
+    for (size_t level = 0; level < ranges.size() && level < mLevelRanges.size(); ++level) {
+      if (ranges[level].count == 0) continue;
+      bindInstanceMatrices(mLod.buffer(), 4, ranges[level].first);
+      g.DrawElementsInstanced(
+          GL_TRIANGLES, static_cast<GLsizei>(mLevelRanges[level].count), GL_UNSIGNED_INT,
+          reinterpret_cast<const void*>(sizeof(uint32_t) * mLevelRanges[level].first),
+          ranges[level].count);
+    }
+    g.BindVertexArray(0);
+    if (mParams.drawWood)
+      mWood.draw(frame, frame.instanceBuffer, 0, static_cast<GLsizei>(instances.size()));
+  }
+
+  nlohmann::json effectiveParams() const override { return writeParams(mParams); }
+  nlohmann::json bakeReport() const override { return mReport; }
+
+  void save(AssetFolder& asset) const override {
+    auto& header = asset.header();
+    header["method"] = "billboard_cloud";
+    header["params"] = effectiveParams();
+    header["report"] = mReport;
+    header["bounds"] = {mTreeBounds.min.x, mTreeBounds.min.y, mTreeBounds.min.z,
+                        mTreeBounds.max.x, mTreeBounds.max.y, mTreeBounds.max.z};
+    header["levels"] = nlohmann::json::array();
+    for (const LevelRange& r : mLevelRanges) header["levels"].push_back({r.first, r.count});
+    asset.writeBlob("vertices.bin", mVertices);
+    asset.writeBlob("indices.bin", mIndices);
+    asset.writeImage("atlas.png", mAtlas);
+    mWood.save(asset);
+    asset.writeHeader();
+  }
+
+  void load(AssetFolder& asset) override {
+    asset.readHeader();
+    const auto& header = asset.header();
+    if (header.value("method", "") != "billboard_cloud")
+      throwInputError("{}: not a billboard_cloud asset", asset.folder().string());
+    const auto& b = header.at("bounds");
+    mTreeBounds.min = {b[0], b[1], b[2]};
+    mTreeBounds.max = {b[3], b[4], b[5]};
+    mReport = header.at("report");
+    mLevelRanges.clear();
+    for (const auto& r : header.at("levels")) mLevelRanges.push_back({r[0], r[1]});
+    mVertices = asset.readBlobAs<MeshVertex>("vertices.bin");
+    mIndices = asset.readBlobAs<uint32_t>("indices.bin");
+    mAtlas = asset.readImage("atlas.png");
+    mWood.load(asset);
+    for (uint32_t index : mIndices) {
+      if (index >= mVertices.size())
+        throwInputError("{}: corrupt billboard indices", asset.folder().string());
+    }
+    for (const LevelRange& r : mLevelRanges) {
+      if (size_t(r.first) + r.count > mIndices.size())
+        throwInputError("{}: corrupt level ranges", asset.folder().string());
+    }
+  }
+
+ private:
+  static constexpr int kMaxAtlas = 16384;
+  struct LevelRange {
+    uint32_t first = 0;  // first index
+    uint32_t count = 0;  // indices
+  };
+
+  BillboardCloudParams mParams;
+  Aabb mTreeBounds;
+  nlohmann::json mReport;
+  std::vector<LevelRange> mLevelRanges;
+  std::vector<MeshVertex> mVertices;
+  std::vector<uint32_t> mIndices;
+  ImageRgba8 mAtlas;
+  gl::Buffer mVbo, mIbo;
+  gl::VertexArray mVao;
+  gl::Texture mAtlasTexture;
+  gl::Program mProgram;
+  LodInstances mLod;
+  WoodRenderer mWood;
+};
+
+}  // namespace
+
+void registerBillboardCloud(MethodRegistry& registry) {
+  registry.add(
+      {"billboard_cloud", "classic billboard cloud: one orthographic leaf texture per billboard",
+       [](const nlohmann::json& params, const std::string& path) -> std::unique_ptr<Method> {
+         return std::make_unique<BillboardCloudMethod>(
+             readParams<BillboardCloudParams>(params, path, "billboard_cloud"));
+       }});
+}
+
+}  // namespace canopy

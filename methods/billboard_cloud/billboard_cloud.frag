@@ -1,0 +1,23 @@
+#version 430 core
+// A billboard texel: alpha test at 0.5 (the captured coverage), albedo or two-sided Lambert with
+// the billboard's plane normal (the classic method keeps no per-leaf normals).
+in vec3 vNormal;
+in vec2 vUv;
+
+uniform sampler2D uAtlas;  // sRGB, so samples are linear
+uniform int uLit;
+uniform vec3 uLightDirection;
+uniform float uAmbient;
+
+out vec4 outColor;
+
+void main() {
+  vec4 texel = texture(uAtlas, vUv);
+  if (texel.a < 0.5) discard;
+  vec3 color = texel.rgb;
+  if (uLit != 0) {
+    vec3 normal = normalize(gl_FrontFacing ? vNormal : -vNormal);
+    color *= uAmbient + (1.0 - uAmbient) * max(dot(normal, uLightDirection), 0.0);
+  }
+  outColor = vec4(color, 1.0);
+}

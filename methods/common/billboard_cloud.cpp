@@ -1,0 +1,295 @@
+#include "methods/common/billboard_cloud.h"
+
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include <glm/geometric.hpp>
+
+#include "common/error.h"
+#include "common/random.h"
+
+namespace canopy {
+
+glm::vec3 Billboard::corner(int i) const {
+  static constexpr float kSignU[4] = {-1, 1, 1, -1};
+  static constexpr float kSignV[4] = {-1, -1, 1, 1};
+  return center + axisU * (kSignU[i] * halfExtents.x) + axisV * (kSignV[i] * halfExtents.y);
+}
+
+glm::vec2 Billboard::toPlane(const glm::vec3& p) const {
+  const glm::vec3 d = p - center;
+  return {glm::dot(d, axisU), glm::dot(d, axisV)};
+}
+
+namespace {
+
+double cross2(const glm::dvec2& o, const glm::dvec2& a, const glm::dvec2& b) {
+  return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+}
+
+// Andrew's monotone chain; counter-clockwise, no collinear points.
+std::vector<glm::dvec2> convexHull(std::vector<glm::dvec2> points) {
+  std::sort(points.begin(), points.end(), [](const glm::dvec2& a, const glm::dvec2& b) {
+    return a.x < b.x || (a.x == b.x && a.y < b.y);
+  });
+  points.erase(std::unique(points.begin(), points.end()), points.end());
+  if (points.size() < 3) return points;
+  std::vector<glm::dvec2> hull(2 * points.size());
+  size_t k = 0;
+  for (const auto& p : points) {
+    while (k >= 2 && cross2(hull[k - 2], hull[k - 1], p) <= 0) --k;
+    hull[k++] = p;
+  }
+  for (size_t i = points.size() - 1, lower = k + 1; i-- > 0;) {
+    while (k >= lower && cross2(hull[k - 2], hull[k - 1], points[i]) <= 0) --k;
+    hull[k++] = points[i];
+  }
+  hull.resize(k - 1);
+  return hull;
+}
+
+struct Plane {
+  glm::vec3 origin{0.0f};
+  glm::vec3 normal{0, 0, 1};
+};
+
+// Least-squares plane through points: the centroid and the eigenvector of the smallest
+// eigenvalue of their covariance.
+Plane fitPlane(const std::vector<glm::vec3>& points, const glm::vec3& preferredSide) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const glm::vec3& p : points) mean += Eigen::Vector3d(p.x, p.y, p.z);
+  mean /= double(points.size());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const glm::vec3& p : points) {
+    const Eigen::Vector3d d = Eigen::Vector3d(p.x, p.y, p.z) - mean;
+    covariance += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+  const Eigen::Vector3d n = solver.eigenvectors().col(0);  // eigenvalues ascend
+  Plane plane;
+  plane.origin = glm::vec3(mean.x(), mean.y(), mean.z());
+  plane.normal = glm::normalize(glm::vec3(n.x(), n.y(), n.z()));
+  if (glm::dot(plane.normal, preferredSide) < 0.0f) plane.normal = -plane.normal;
+  return plane;
+}
+
+struct LeafFeatures {
+  glm::vec3 center;
+  glm::vec3 normal;
+  glm::vec3 corners[4];
+};
+
+glm::vec3 anyPerpendicular(const glm::vec3& n) {
+  const glm::vec3 helper = std::abs(n.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+  return glm::normalize(glm::cross(helper, n));
+}
+
+}  // namespace
+
+Rectangle2D minimumAreaRectangle(std::vector<glm::vec2> points) {
+  std::vector<glm::dvec2> input;
+  input.reserve(points.size());
+  for (const glm::vec2& p : points) input.emplace_back(p);
+  const std::vector<glm::dvec2> hull = convexHull(input);
+  Rectangle2D best;
+  if (hull.empty()) return best;
+  double bestArea = std::numeric_limits<double>::max();
+  const size_t n = hull.size();
+  for (size_t i = 0; i < std::max<size_t>(n, 1); ++i) {
+    glm::dvec2 edge = n >= 2 ? hull[(i + 1) % n] - hull[i] : glm::dvec2(1, 0);
+    if (glm::length(edge) <= 0) continue;
+    edge = glm::normalize(edge);
+    const glm::dvec2 normal(-edge.y, edge.x);
+    double minU = std::numeric_limits<double>::max(), maxU = -minU, minV = minU, maxV = -minU;
+    for (const glm::dvec2& p : hull) {
+      const double u = glm::dot(p, edge), v = glm::dot(p, normal);
+      minU = std::min(minU, u), maxU = std::max(maxU, u);
+      minV = std::min(minV, v), maxV = std::max(maxV, v);
+    }
+    const double area = (maxU - minU) * (maxV - minV);
+    if (area < bestArea - 1e-12) {
+      bestArea = area;
+      const glm::dvec2 center = edge * (0.5 * (minU + maxU)) + normal * (0.5 * (minV + maxV));
+      best.center = glm::vec2(center);
+      best.axis = glm::vec2(edge);
+      best.halfExtents = glm::vec2(0.5 * (maxU - minU), 0.5 * (maxV - minV));
+    }
+  }
+  return best;
+}
+
+BillboardCloud buildBillboardCloud(const Tree& tree, const ClusteringParams& params,
+                                   uint64_t seed) {
+  const auto start = std::chrono::steady_clock::now();
+  const size_t leafCount = tree.leaves.size();
+  const int k = params.clusters;
+  if (k <= 0 || size_t(k) > leafCount) {
+    throwInputError("parameter 'clusters' = {} must be in [1, {}] (the tree's leaf count)", k,
+                    leafCount);
+  }
+  std::vector<LeafFeatures> leaves(leafCount);
+  double leafSize = 0.0;
+  for (size_t i = 0; i < leafCount; ++i) {
+    const Leaf& leaf = tree.leaves[i];
+    leaves[i].center = leaf.center;
+    leaves[i].normal = leaf.normal;
+    for (int c = 0; c < 4; ++c) leaves[i].corners[c] = leaf.corner(c);
+    leafSize += std::max(leaf.halfExtents.x, leaf.halfExtents.y) * 2.0;
+  }
+  const float L2 = float(std::pow(leafSize / double(leafCount), 2.0));
+  const float localRadius = tree.boundingSphereRadius() / std::cbrt(float(k));
+  const float orientationScale = params.orientationWeight * L2;
+  const float compactnessScale = params.compactnessWeight * L2 / (localRadius * localRadius);
+
+  // k-means++ seeding on leaf centres (deterministic in the seed).
+  Random random(seed, 0x9e3779b97f4a7c15ULL);
+  std::vector<Plane> planes(k);
+  std::vector<glm::vec3> centroids(k);
+  std::vector<float> nearest(leafCount, std::numeric_limits<float>::max());
+  size_t chosen = random.below(static_cast<uint32_t>(leafCount));
+  for (int c = 0; c < k; ++c) {
+    planes[c] = {leaves[chosen].center, leaves[chosen].normal};
+    centroids[c] = leaves[chosen].center;
+    double total = 0.0;
+    for (size_t i = 0; i < leafCount; ++i) {
+      const glm::vec3 d = leaves[i].center - centroids[c];
+      nearest[i] = std::min(nearest[i], glm::dot(d, d));
+      total += nearest[i];
+    }
+    double target = random.uniform() * total;
+    chosen = leafCount - 1;
+    for (size_t i = 0; i < leafCount; ++i) {
+      target -= nearest[i];
+      if (target < 0) {
+        chosen = i;
+        break;
+      }
+    }
+  }
+
+  std::vector<int> assignment(leafCount, -1);
+  std::vector<float> cost(leafCount, 0.0f);
+  BillboardCloud cloud;
+  cloud.requestedClusters = k;
+  for (int iteration = 0; iteration < params.iterations; ++iteration) {
+    // Assign every leaf to its cheapest cluster (independent per leaf: parallel, deterministic).
+    std::vector<int> next(leafCount);
+    tbb::parallel_for(size_t(0), leafCount, [&](size_t i) {
+      const LeafFeatures& leaf = leaves[i];
+      float best = std::numeric_limits<float>::max();
+      int bestCluster = 0;
+      for (int c = 0; c < k; ++c) {
+        const Plane& plane = planes[c];
+        float fit = 0.0f;
+        for (const glm::vec3& corner : leaf.corners) {
+          const float d = glm::dot(plane.normal, corner - plane.origin);
+          fit += d * d;
+        }
+        const float alignment = glm::dot(plane.normal, leaf.normal);
+        const glm::vec3 offset = leaf.center - centroids[c];
+        const float total = 0.25f * fit + orientationScale * (1.0f - alignment * alignment) +
+                            compactnessScale * glm::dot(offset, offset);
+        if (total < best) {
+          best = total;
+          bestCluster = c;
+        }
+      }
+      next[i] = bestCluster;
+      cost[i] = best;
+    });
+    const bool stable = next == assignment;
+    assignment.swap(next);
+    cloud.iterationsRun = iteration + 1;
+    // Refit: group leaves per cluster (sequential, in leaf order), reseed empty clusters at the
+    // worst-fitting leaf, fit planes in parallel.
+    std::vector<std::vector<uint32_t>> members(k);
+    for (size_t i = 0; i < leafCount; ++i)
+      members[assignment[i]].push_back(static_cast<uint32_t>(i));
+    for (int c = 0; c < k; ++c) {
+      if (!members[c].empty()) continue;
+      size_t worst = 0;
+      for (size_t i = 1; i < leafCount; ++i) {
+        if (cost[i] > cost[worst] && members[assignment[i]].size() > 1) worst = i;
+      }
+      auto& donor = members[assignment[worst]];
+      donor.erase(std::find(donor.begin(), donor.end(), static_cast<uint32_t>(worst)));
+      members[c].push_back(static_cast<uint32_t>(worst));
+      assignment[worst] = c;
+      cost[worst] = 0.0f;
+    }
+    tbb::parallel_for(0, k, [&](int c) {
+      std::vector<glm::vec3> points;
+      glm::vec3 normalSum(0.0f), centroid(0.0f);
+      for (uint32_t i : members[c]) {
+        for (const glm::vec3& corner : leaves[i].corners) points.push_back(corner);
+        normalSum += leaves[i].normal;
+        centroid += leaves[i].center;
+      }
+      planes[c] = fitPlane(points, normalSum);
+      centroids[c] = centroid / float(members[c].size());
+    });
+    if (stable) break;
+  }
+
+  // Billboards: the minimum-area rectangle of each cluster's projected leaf corners.
+  std::vector<std::vector<uint32_t>> members(k);
+  for (size_t i = 0; i < leafCount; ++i) members[assignment[i]].push_back(static_cast<uint32_t>(i));
+  cloud.billboards.resize(k);
+  tbb::parallel_for(0, k, [&](int c) {
+    Billboard& billboard = cloud.billboards[c];
+    const Plane& plane = planes[c];
+    const glm::vec3 e1 = anyPerpendicular(plane.normal);
+    const glm::vec3 e2 = glm::cross(plane.normal, e1);
+    std::vector<glm::vec2> projected;
+    double distanceSum = 0.0;
+    for (uint32_t i : members[c]) {
+      for (const glm::vec3& corner : leaves[i].corners) {
+        const glm::vec3 d = corner - plane.origin;
+        projected.emplace_back(glm::dot(d, e1), glm::dot(d, e2));
+        const float distance = std::abs(glm::dot(d, plane.normal));
+        distanceSum += distance;
+        billboard.maxPlaneDistance = std::max(billboard.maxPlaneDistance, distance);
+      }
+      billboard.projectedLeafArea +=
+          tree.leaves[i].area() * std::abs(glm::dot(plane.normal, leaves[i].normal));
+    }
+    const Rectangle2D rectangle = minimumAreaRectangle(projected);
+    billboard.normal = plane.normal;
+    billboard.axisU = glm::normalize(e1 * rectangle.axis.x + e2 * rectangle.axis.y);
+    billboard.axisV = glm::normalize(glm::cross(plane.normal, billboard.axisU));
+    billboard.center = plane.origin + e1 * rectangle.center.x + e2 * rectangle.center.y;
+    billboard.halfExtents = rectangle.halfExtents;
+    billboard.leaves = members[c];
+    billboard.meanPlaneDistance = float(distanceSum / double(4 * members[c].size()));
+  });
+  double distanceSum = 0.0;
+  for (const Billboard& billboard : cloud.billboards) {
+    distanceSum += double(billboard.meanPlaneDistance) * 4.0 * double(billboard.leaves.size());
+    cloud.maxPlaneDistance = std::max(cloud.maxPlaneDistance, billboard.maxPlaneDistance);
+    cloud.quadArea += billboard.area();
+    cloud.projectedLeafArea += billboard.projectedLeafArea;
+  }
+  cloud.meanPlaneDistance = float(distanceSum / double(4 * leafCount));
+  cloud.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return cloud;
+}
+
+std::vector<BillboardCloud> buildBillboardCloudFamily(const Tree& tree,
+                                                      const ClusteringParams& params,
+                                                      const std::vector<int>& divisors,
+                                                      uint64_t seed) {
+  std::vector<BillboardCloud> family;
+  for (int divisor : divisors) {
+    ClusteringParams level = params;
+    level.clusters = std::max(1, static_cast<int>(std::lround(double(params.clusters) / divisor)));
+    family.push_back(buildBillboardCloud(tree, level, seed + static_cast<uint64_t>(divisor)));
+  }
+  return family;
+}
+
+}  // namespace canopy

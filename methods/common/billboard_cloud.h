@@ -1,0 +1,73 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include "common/tree.h"
+
+namespace canopy {
+
+// How leaves are grouped into billboards (shared by billboard_cloud, single_leaf_indirect and
+// multilayer_indirect). The cost of a leaf in a cluster, in units of the mean leaf size L:
+//   mean over its corners of (n·(x − o))²                     plane fit
+// + orientationWeight · L² · (1 − (n·n_leaf)²)                  orientation
+// + compactnessWeight · L² · |c_leaf − centroid|² / r²           locality, r = R_tree / K^(1/3)
+struct ClusteringParams {
+  int clusters = 200;              // K, billboards of the finest cloud
+  float orientationWeight = 1.0f;  // weight of the leaf-orientation term
+  float compactnessWeight = 1.0f;  // weight of the locality term
+  int iterations = 20;             // assignment/refit rounds at most (stops when stable)
+};
+
+// One billboard: a planar rectangle and the leaves it stands for.
+struct Billboard {
+  glm::vec3 center{0.0f};     // of the rectangle
+  glm::vec3 normal{0, 0, 1};  // unit; points to the side most leaf fronts face
+  glm::vec3 axisU{1, 0, 0};   // unit, in the plane, along the rectangle's first side
+  glm::vec3 axisV{0, 1, 0};   // unit, normal × axisU
+  glm::vec2 halfExtents{0.0f};
+  std::vector<uint32_t> leaves;  // indices into Tree::leaves
+  float meanPlaneDistance = 0;   // over the leaves' corners
+  float maxPlaneDistance = 0;
+  float projectedLeafArea = 0;  // Σ leaf area · |n·n_leaf|
+
+  glm::vec3 corner(int i) const;  // CCW seen from +normal: (−,−) (+,−) (+,+) (−,+)
+  glm::vec2 toPlane(const glm::vec3& p) const;  // coordinates along axisU, axisV from center
+  float area() const { return 4.0f * halfExtents.x * halfExtents.y; }
+};
+
+struct BillboardCloud {
+  std::vector<Billboard> billboards;
+  int requestedClusters = 0;
+  int iterationsRun = 0;
+  double seconds = 0;
+  float meanPlaneDistance = 0;  // over all leaf corners
+  float maxPlaneDistance = 0;
+  double quadArea = 0;           // Σ billboard areas
+  double projectedLeafArea = 0;  // Σ projected leaf areas
+};
+
+// Clusters the leaves into params.clusters billboards. Deterministic in `seed` whatever the
+// thread count. Throws InputError naming "clusters" when K <= 0 or K > leaves.
+BillboardCloud buildBillboardCloud(const Tree& tree, const ClusteringParams& params, uint64_t seed);
+
+// The coarse-to-fine family for geometric level of detail: clouds of K / divisor billboards for
+// each divisor (e.g. {1, 3, 10}), at least one billboard each.
+std::vector<BillboardCloud> buildBillboardCloudFamily(const Tree& tree,
+                                                      const ClusteringParams& params,
+                                                      const std::vector<int>& divisors,
+                                                      uint64_t seed);
+
+// The minimum-area rectangle enclosing 2D points (rotating calipers on the convex hull):
+// centre, unit direction of the first side, half extents.
+struct Rectangle2D {
+  glm::vec2 center{0.0f};
+  glm::vec2 axis{1.0f, 0.0f};
+  glm::vec2 halfExtents{0.0f};
+};
+Rectangle2D minimumAreaRectangle(std::vector<glm::vec2> points);
+
+}  // namespace canopy

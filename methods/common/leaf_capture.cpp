@@ -1,0 +1,222 @@
+#include "methods/common/leaf_capture.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+
+namespace canopy {
+
+LeafImageSampler::LeafImageSampler(const Tree& tree) {
+  for (const LeafTexture& texture : tree.leafTextures) {
+    for (const ImageRgba8* image : {&texture.front, &texture.back}) {
+      std::vector<Level> pyramid(1);
+      pyramid[0].width = image->width;
+      pyramid[0].height = image->height;
+      pyramid[0].texels.resize(size_t(image->width) * image->height);
+      for (size_t i = 0; i < pyramid[0].texels.size(); ++i) {
+        const uint8_t* p = &image->pixels[i * 4];
+        pyramid[0].texels[i] = {srgbToLinear(p[0] / 255.0f), srgbToLinear(p[1] / 255.0f),
+                                srgbToLinear(p[2] / 255.0f), p[3] / 255.0f};
+      }
+      // Box-filtered levels; colour weighted by alpha so transparent texels do not darken edges.
+      while (pyramid.back().width > 1 || pyramid.back().height > 1) {
+        const Level& fine = pyramid.back();
+        Level coarse;
+        coarse.width = std::max(1, fine.width / 2);
+        coarse.height = std::max(1, fine.height / 2);
+        coarse.texels.resize(size_t(coarse.width) * coarse.height);
+        for (int y = 0; y < coarse.height; ++y) {
+          for (int x = 0; x < coarse.width; ++x) {
+            glm::vec4 sum(0.0f);
+            for (int dy = 0; dy < 2; ++dy) {
+              for (int dx = 0; dx < 2; ++dx) {
+                const int fx = std::min(fine.width - 1, x * 2 + dx),
+                          fy = std::min(fine.height - 1, y * 2 + dy);
+                const glm::vec4 t = fine.texels[size_t(fy) * fine.width + fx];
+                sum += glm::vec4(glm::vec3(t) * t.a, t.a);
+              }
+            }
+            coarse.texels[size_t(y) * coarse.width + x] =
+                sum.a > 0.0f ? glm::vec4(glm::vec3(sum) / sum.a, sum.a * 0.25f) : glm::vec4(0.0f);
+          }
+        }
+        pyramid.push_back(std::move(coarse));
+      }
+      mPyramids.push_back(std::move(pyramid));
+    }
+  }
+}
+
+glm::ivec2 LeafImageSampler::size(uint32_t texture) const {
+  const Level& level = mPyramids[texture * 2][0];
+  return {level.width, level.height};
+}
+
+glm::vec4 LeafImageSampler::sample(uint32_t texture, bool back, glm::vec2 uv,
+                                   float footprint) const {
+  const auto& pyramid = mPyramids[texture * 2 + (back ? 1 : 0)];
+  const int level =
+      std::clamp(static_cast<int>(std::floor(std::log2(std::max(footprint, 1.0f)) + 0.5f)), 0,
+                 static_cast<int>(pyramid.size()) - 1);
+  const Level& l = pyramid[level];
+  const float x = uv.x * l.width - 0.5f, y = uv.y * l.height - 0.5f;
+  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+  const float fx = x - x0, fy = y - y0;
+  auto at = [&](int px, int py) {
+    px = std::clamp(px, 0, l.width - 1);
+    py = std::clamp(py, 0, l.height - 1);
+    return l.texels[size_t(py) * l.width + px];
+  };
+  return glm::mix(glm::mix(at(x0, y0), at(x0 + 1, y0), fx),
+                  glm::mix(at(x0, y0 + 1), at(x0 + 1, y0 + 1), fx), fy);
+}
+
+ImageRgba8 captureLeavesOrthographic(const Tree& tree, const LeafImageSampler& sampler,
+                                     const std::vector<uint32_t>& leaves,
+                                     const Billboard& billboard, int width, int height,
+                                     int supersample) {
+  const int sw = width * supersample, sh = height * supersample;
+  std::vector<float> depth(size_t(sw) * sh, -std::numeric_limits<float>::infinity());
+  std::vector<glm::vec3> color(size_t(sw) * sh, glm::vec3(0.0f));
+  const glm::vec2 extent = billboard.halfExtents * 2.0f;
+  const float stepU = extent.x / float(sw), stepV = extent.y / float(sh);
+  for (uint32_t index : leaves) {
+    const Leaf& leaf = tree.leaves[index];
+    const float facing = glm::dot(leaf.normal, billboard.normal);
+    if (std::abs(facing) < 1e-4f) continue;  // edge-on: no projected area
+    glm::vec2 lo(std::numeric_limits<float>::max()), hi(std::numeric_limits<float>::lowest());
+    for (int c = 0; c < 4; ++c) {
+      const glm::vec2 p = billboard.toPlane(leaf.corner(c));
+      lo = glm::min(lo, p);
+      hi = glm::max(hi, p);
+    }
+    const int x0 =
+        std::max(0, static_cast<int>(std::floor((lo.x + billboard.halfExtents.x) / stepU)));
+    const int x1 =
+        std::min(sw - 1, static_cast<int>(std::floor((hi.x + billboard.halfExtents.x) / stepU)));
+    const int y0 =
+        std::max(0, static_cast<int>(std::floor((lo.y + billboard.halfExtents.y) / stepV)));
+    const int y1 =
+        std::min(sh - 1, static_cast<int>(std::floor((hi.y + billboard.halfExtents.y) / stepV)));
+    const glm::ivec2 texSize = sampler.size(leaf.texture);
+    // Leaf texels under one sample, foreshortening included.
+    const float footprint =
+        std::max(stepU, stepV) / std::abs(facing) *
+        std::max(texSize.x * std::abs(leaf.uvMax.x - leaf.uvMin.x) / (2.0f * leaf.halfExtents.x),
+                 texSize.y * std::abs(leaf.uvMax.y - leaf.uvMin.y) / (2.0f * leaf.halfExtents.y));
+    const bool back = facing < 0.0f;
+    for (int y = y0; y <= y1; ++y) {
+      for (int x = x0; x <= x1; ++x) {
+        const glm::vec3 p = billboard.center +
+                            billboard.axisU * (-billboard.halfExtents.x + (x + 0.5f) * stepU) +
+                            billboard.axisV * (-billboard.halfExtents.y + (y + 0.5f) * stepV);
+        const float t = glm::dot(leaf.normal, leaf.center - p) / facing;
+        const size_t s = size_t(y) * sw + x;
+        if (t <= depth[s]) continue;
+        const glm::vec3 onLeaf = p + billboard.normal * t - leaf.center;
+        const float a = glm::dot(onLeaf, leaf.axisU) / leaf.halfExtents.x;
+        const float b = glm::dot(onLeaf, leaf.axisV) / leaf.halfExtents.y;
+        if (std::abs(a) > 1.0f || std::abs(b) > 1.0f) continue;
+        const glm::vec2 uv =
+            leaf.uvMin + (glm::vec2(a, b) + 1.0f) * 0.5f * (leaf.uvMax - leaf.uvMin);
+        const glm::vec4 texel = sampler.sample(leaf.texture, back, uv, footprint);
+        if (texel.a < 0.5f) continue;
+        depth[s] = t;
+        color[s] = glm::vec3(texel);
+      }
+    }
+  }
+  ImageRgba8 image(width, height);
+  const float samples = float(supersample * supersample);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      glm::vec3 sum(0.0f);
+      int covered = 0;
+      for (int sy = 0; sy < supersample; ++sy) {
+        for (int sx = 0; sx < supersample; ++sx) {
+          const size_t s = size_t(y * supersample + sy) * sw + (x * supersample + sx);
+          if (depth[s] == -std::numeric_limits<float>::infinity()) continue;
+          sum += color[s];
+          ++covered;
+        }
+      }
+      uint8_t* out = image.at(x, y);
+      if (covered > 0) {
+        const glm::vec3 mean = sum / float(covered);
+        for (int c = 0; c < 3; ++c) out[c] = encodeSrgb8(mean[c]);
+      }
+      out[3] = static_cast<uint8_t>(std::lround(255.0f * float(covered) / samples));
+    }
+  }
+  return image;
+}
+
+AtlasLayout packAtlas(const std::vector<glm::ivec2>& sizes, int padding, int alignment) {
+  const auto align = [&](int v) { return (v + alignment - 1) / alignment * alignment; };
+  std::vector<size_t> order(sizes.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return sizes[a].y > sizes[b].y; });
+  double area = 0.0;
+  int widest = 1;
+  for (const glm::ivec2& s : sizes) {
+    area += double(align(s.x + 2 * padding)) * align(s.y + 2 * padding);
+    widest = std::max(widest, align(s.x + 2 * padding));
+  }
+  AtlasLayout layout;
+  layout.width = 1;
+  while (layout.width < widest || double(layout.width) * layout.width < area) layout.width *= 2;
+  layout.origins.resize(sizes.size());
+  int x = 0, y = 0, shelfHeight = 0;
+  for (size_t i : order) {
+    const int slotW = align(sizes[i].x + 2 * padding), slotH = align(sizes[i].y + 2 * padding);
+    if (x + slotW > layout.width) {
+      x = 0;
+      y += shelfHeight;
+      shelfHeight = 0;
+    }
+    layout.origins[i] = {x + padding, y + padding};
+    x += slotW;
+    shelfHeight = std::max(shelfHeight, slotH);
+  }
+  layout.height = std::max(alignment, y + shelfHeight);
+  return layout;
+}
+
+void dilateTransparentColors(ImageRgba8& image, int passes) {
+  std::vector<uint8_t> filled(size_t(image.width) * image.height);
+  for (size_t i = 0; i < filled.size(); ++i) filled[i] = image.pixels[i * 4 + 3] > 0;
+  for (int pass = 0; pass < passes; ++pass) {
+    std::vector<uint8_t> next = filled;
+    ImageRgba8 source = image;
+    bool changed = false;
+    for (int y = 0; y < image.height; ++y) {
+      for (int x = 0; x < image.width; ++x) {
+        const size_t i = size_t(y) * image.width + x;
+        if (filled[i]) continue;
+        int sum[3] = {0, 0, 0}, count = 0;
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int nx = x + dx, ny = y + dy;
+            if (nx < 0 || ny < 0 || nx >= image.width || ny >= image.height) continue;
+            const size_t j = size_t(ny) * image.width + nx;
+            if (!filled[j]) continue;
+            for (int c = 0; c < 3; ++c) sum[c] += source.pixels[j * 4 + c];
+            ++count;
+          }
+        }
+        if (count == 0) continue;
+        for (int c = 0; c < 3; ++c) image.pixels[i * 4 + c] = static_cast<uint8_t>(sum[c] / count);
+        next[i] = 1;
+        changed = true;
+      }
+    }
+    filled.swap(next);
+    if (!changed) break;
+  }
+}
+
+}  // namespace canopy

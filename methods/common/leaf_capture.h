@@ -1,0 +1,56 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec2.hpp>
+#include <glm/vec4.hpp>
+
+#include "common/image.h"
+#include "common/tree.h"
+#include "methods/common/billboard_cloud.h"
+
+namespace canopy {
+
+// Leaf images as linear float mip pyramids (straight alpha), sampled on the CPU by every bake
+// that projects leaves (billboard textures, leaf images at quantized orientations).
+class LeafImageSampler {
+ public:
+  explicit LeafImageSampler(const Tree& tree);
+  // Bilinear sample at uv (Canopy convention) from the mip level matching `footprint`, the leaf
+  // texels one sample covers; rgb linear, a straight alpha.
+  glm::vec4 sample(uint32_t texture, bool back, glm::vec2 uv, float footprint) const;
+  glm::ivec2 size(uint32_t texture) const;
+
+ private:
+  struct Level {
+    int width = 0, height = 0;
+    std::vector<glm::vec4> texels;
+  };
+  std::vector<std::vector<Level>> mPyramids;  // [texture * 2 + back][level]
+};
+
+// What an orthographic camera on the +normal side of `billboard` sees of `leaves` (and only
+// them), over the billboard rectangle, at width × height texels with supersample² samples per
+// texel; each leaf alpha-tested at 0.5, front or back image by the side it turns to the camera.
+// Texel colour: the linear mean of covered samples, sRGB-encoded; alpha: the covered fraction.
+ImageRgba8 captureLeavesOrthographic(const Tree& tree, const LeafImageSampler& sampler,
+                                     const std::vector<uint32_t>& leaves,
+                                     const Billboard& billboard, int width, int height,
+                                     int supersample);
+
+// Positions of rectangles in an atlas: shelves sorted by height, each rectangle inside a slot
+// with `padding` texels on every side, slots aligned to `alignment` texels (so the first
+// log2(alignment) mip levels of different rectangles never share a texel).
+struct AtlasLayout {
+  int width = 0;
+  int height = 0;
+  std::vector<glm::ivec2> origins;  // of each rectangle's first texel (inside its padding)
+};
+AtlasLayout packAtlas(const std::vector<glm::ivec2>& sizes, int padding, int alignment);
+
+// Gives fully transparent texels the colour of their nearest covered neighbours (up to
+// `passes` texels away), so bilinear and mip filtering near leaf edges do not pull in black.
+void dilateTransparentColors(ImageRgba8& image, int passes);
+
+}  // namespace canopy

@@ -1,0 +1,57 @@
+#include "methods/common/lod_instances.h"
+
+#include <algorithm>
+
+#include <glm/geometric.hpp>
+
+namespace canopy {
+
+void LodInstances::attach(gl::Device& device, std::string owner) {
+  mDevice = &device;
+  mOwner = std::move(owner);
+}
+
+int LodInstances::levelFor(float distanceInRadii, const std::vector<float>& thresholds) {
+  int level = 0;
+  while (level < static_cast<int>(thresholds.size()) && distanceInRadii >= thresholds[level])
+    ++level;
+  return level;
+}
+
+void LodInstances::update(const FrameContext& frame, std::span<const Instance> instances,
+                          const Aabb& treeBounds, const std::vector<float>& thresholds) {
+  const int levels = static_cast<int>(thresholds.size()) + 1;
+  const float radius = 0.5f * glm::length(treeBounds.extent());
+  std::vector<std::vector<glm::mat4>> byLevel(levels);
+  for (const Instance& instance : instances) {
+    const glm::mat4 model = instance.modelMatrix();
+    int level = frame.forcedLevel;
+    if (level < 0) {
+      const glm::vec3 centre = glm::vec3(model * glm::vec4(treeBounds.center(), 1.0f));
+      level = levelFor(glm::length(frame.cameraPosition - centre) / (radius * instance.scale),
+                       thresholds);
+    }
+    byLevel[std::min(level, levels - 1)].push_back(model);
+  }
+  mMatrices.clear();
+  mRanges.assign(levels, Range{});
+  for (int level = 0; level < levels; ++level) {
+    mRanges[level] = {static_cast<GLint>(mMatrices.size()),
+                      static_cast<GLsizei>(byLevel[level].size())};
+    mMatrices.insert(mMatrices.end(), byLevel[level].begin(), byLevel[level].end());
+  }
+  if (mMatrices.size() > mCapacity || !mBuffer.id()) {
+    mCapacity = std::max<size_t>(mMatrices.size(), 16);
+    gl::Device::OwnerScope owner(*mDevice, mOwner);
+    mBuffer = mDevice->createBuffer(gl::MemoryCategory::kOther, GL_ARRAY_BUFFER,
+                                    mCapacity * sizeof(glm::mat4), nullptr,
+                                    "per-frame instance lists", GL_DYNAMIC_DRAW);
+  }
+  const gl::Api& g = gl::api();
+  g.BindBuffer(GL_ARRAY_BUFFER, mBuffer.id());
+  g.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(mMatrices.size() * sizeof(glm::mat4)),
+                  mMatrices.data());
+  g.BindBuffer(GL_ARRAY_BUFFER, 0);
+}
+
+}  // namespace canopy

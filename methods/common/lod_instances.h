@@ -1,0 +1,44 @@
+#pragma once
+
+#include <span>
+#include <string>
+#include <vector>
+
+#include "common/gl/device.h"
+#include "common/views.h"
+#include "methods/method.h"
+
+namespace canopy {
+
+// Sorts a frame's instances into levels of detail by their distance to the camera, measured from
+// each instance's bounding-sphere centre in (scaled) bounding radii, and uploads their matrices
+// level by level into one buffer. Shared by the methods with geometric LoD.
+class LodInstances {
+ public:
+  struct Range {
+    GLint first = 0;
+    GLsizei count = 0;
+  };
+
+  // The device and owner are remembered at upload, so the buffer is charged to the method.
+  void attach(gl::Device& device, std::string owner);
+  // Level i holds instances closer than thresholds[i] radii; the last level the rest.
+  // frame.forcedLevel >= 0 puts every instance in that level.
+  void update(const FrameContext& frame, std::span<const Instance> instances,
+              const Aabb& treeBounds, const std::vector<float>& thresholds);
+  GLuint buffer() const { return mBuffer.id(); }
+  const std::vector<Range>& ranges() const { return mRanges; }
+
+  // The level one instance at `distanceInRadii` gets.
+  static int levelFor(float distanceInRadii, const std::vector<float>& thresholds);
+
+ private:
+  gl::Device* mDevice = nullptr;
+  std::string mOwner;
+  gl::Buffer mBuffer;
+  size_t mCapacity = 0;
+  std::vector<Range> mRanges;
+  std::vector<glm::mat4> mMatrices;
+};
+
+}  // namespace canopy

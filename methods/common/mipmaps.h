@@ -1,0 +1,17 @@
+#pragma once
+
+#include <vector>
+
+#include "common/image.h"
+
+namespace canopy {
+
+// A full mip chain (level 0 = `base`) for alpha-tested textures. Colour is averaged in linear
+// space weighted by alpha; each level's alpha is then scaled so that the fraction of texels
+// passing the alpha test matches level 0 (Castaño's coverage-preserving mipmaps). Plain box
+// filtering lets averaged alpha of sparse foliage fall under the threshold, and far billboards
+// vanish.
+std::vector<ImageRgba8> buildCoveragePreservingMips(const ImageRgba8& base,
+                                                    float alphaThreshold = 0.5f);
+
+}  // namespace canopy
