@@ -3,6 +3,7 @@
 #include "methods/billboard_cloud/billboard_cloud.h"
 #include "methods/method.h"
 #include "methods/polygonal/polygonal.h"
+#include "methods/single_leaf_indirect/single_leaf_indirect.h"
 
 namespace canopy {
 
@@ -34,6 +35,7 @@ const MethodRegistry& builtinMethods() {
     // One explicit registration per method, in the order reports list them.
     registerPolygonal(r);
     registerBillboardCloud(r);
+    registerSingleLeafIndirect(r);
     return r;
   }();
   return registry;

@@ -111,12 +111,13 @@ void Device::uploadTexture(Texture& texture, GLenum format, GLenum type, const v
 }
 
 void Device::uploadTextureLayer(Texture& texture, int layer, GLenum format, GLenum type,
-                                const void* pixels) {
+                                const void* pixels, int level) {
   const Api& g = api();
   const TextureDesc& d = texture.desc;
+  const int w = std::max(1, d.width >> level), h = std::max(1, d.height >> level);
   g.BindTexture(d.target, texture.id());
   g.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  g.TexSubImage3D(d.target, 0, 0, 0, layer, d.width, d.height, 1, format, type, pixels);
+  g.TexSubImage3D(d.target, level, 0, 0, layer, w, h, 1, format, type, pixels);
   g.BindTexture(d.target, 0);
   checkError("uploadTextureLayer");
 }

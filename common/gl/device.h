@@ -170,7 +170,7 @@ class Device {
   // Uploads level 0 (all layers for arrays) from tightly packed pixels, then builds mipmaps.
   void uploadTexture(Texture& texture, GLenum format, GLenum type, const void* pixels);
   void uploadTextureLayer(Texture& texture, int layer, GLenum format, GLenum type,
-                          const void* pixels);
+                          const void* pixels, int level = 0);
   void generateMipmaps(Texture& texture);
   // Uploads one mip level of a 2D texture (levels made on the CPU, e.g. coverage-preserving).
   void uploadTextureLevel(Texture& texture, int level, GLenum format, GLenum type,

@@ -1,0 +1,272 @@
+#include "methods/single_leaf_indirect/single_leaf_indirect.h"
+
+#include "common/config.h"
+#include "methods/common/cloud_params.h"
+#include "methods/common/leaf_capture.h"
+#include "methods/common/leaf_orientations.h"
+#include "methods/common/lod_instances.h"
+#include "methods/common/mesh.h"
+#include "methods/single_leaf_indirect/single_leaf_grid.h"
+
+namespace canopy {
+namespace {
+
+struct SingleLeafParams {
+  CloudParams cloud;
+  float cellSize = 1.0f;   // grid cell side, in mean leaf lengths (the grid resolution)
+  int maxCells = 1024;     // cap on cells per billboard side
+  OrientationBins bins;    // quantized orientations of the Leaves Texture
+  int leafImageSize = 64;  // texels per side of each oriented leaf image
+  bool drawWood = true;    // draw the trunk and branches as geometry
+
+  template <class Visitor>
+  void visit(Visitor& v) {
+    cloud.visit(v);
+    v("cell_size", cellSize, 0.05f, 100.0f);
+    v("max_cells", maxCells, 1, 4096);
+    v("rotations", bins.rotations, 1, 64);
+    v("tilts", bins.tilts, 1, 8);
+    v("leaf_image_size", leafImageSize, 4, 512);
+    v("wood", drawWood);
+  }
+};
+
+struct Vertex {
+  glm::vec3 position;
+  glm::vec3 normal;
+  glm::vec2 uv;     // over the billboard
+  glm::ivec4 grid;  // first cell in the index atlas, cells
+};
+
+class SingleLeafIndirect final : public Method {
+ public:
+  explicit SingleLeafIndirect(SingleLeafParams params) : mParams(params) {
+    mParams.cloud.validate("single_leaf_indirect");
+  }
+
+  void bake(const Tree& tree, BakeContext& ctx) override {
+    mTreeBounds = tree.bounds;
+    mWood.bake(tree);
+    if (orientedImageCount(tree.leafTextures.size(), mParams.bins) >= 65535) {
+      throwInputError(
+          "single_leaf_indirect: rotations × tilts × 2 × leaf textures must stay below 65535");
+    }
+    const auto clouds = buildBillboardCloudFamily(tree, mParams.cloud.clustering,
+                                                  mParams.cloud.divisors(), ctx.seed);
+    const float cellLength = mParams.cellSize * meanLeafLength(tree);
+    std::vector<SingleLeafGrid> grids;
+    std::vector<const Billboard*> billboards;
+    mLevelRanges.clear();
+    for (const BillboardCloud& cloud : clouds) {
+      mLevelRanges.push_back({static_cast<uint32_t>(billboards.size() * 6),
+                              static_cast<uint32_t>(cloud.billboards.size() * 6)});
+      for (SingleLeafGrid& grid :
+           buildSingleLeafGrids(tree, cloud, cellLength, mParams.bins, mParams.maxCells)) {
+        grids.push_back(std::move(grid));
+      }
+      for (const Billboard& billboard : cloud.billboards) billboards.push_back(&billboard);
+    }
+    std::vector<glm::ivec2> sizes;
+    for (const SingleLeafGrid& grid : grids) sizes.push_back(grid.cells);
+    const AtlasLayout layout = packAtlas(sizes, 0, 1);
+    if (layout.width > 16384 || layout.height > 16384) {
+      throwInputError(
+          "single_leaf_indirect: parameter 'cell_size' = {} needs a {}x{} index atlas; raise it",
+          mParams.cellSize, layout.width, layout.height);
+    }
+    mIndexSize = {layout.width, layout.height};
+    mIndex.assign(size_t(layout.width) * layout.height, 0);
+    size_t filled = 0, leavesKept = 0;
+    for (size_t i = 0; i < grids.size(); ++i) {
+      const SingleLeafGrid& grid = grids[i];
+      for (int y = 0; y < grid.cells.y; ++y) {
+        for (int x = 0; x < grid.cells.x; ++x) {
+          const size_t cell = size_t(y) * grid.cells.x + x;
+          if (grid.leaf[cell] < 0) continue;
+          mIndex[size_t(layout.origins[i].y + y) * layout.width + layout.origins[i].x + x] =
+              static_cast<uint16_t>(grid.image[cell] + 1);
+          ++filled;
+        }
+      }
+      if (i < clouds[0].billboards.size()) {
+        for (int32_t leaf : grid.leaf) leavesKept += leaf >= 0;
+      }
+    }
+    mVertices.clear();
+    mIndices.clear();
+    static constexpr int kU[4] = {0, 1, 1, 0}, kV[4] = {0, 0, 1, 1};
+    for (size_t i = 0; i < billboards.size(); ++i) {
+      const auto base = static_cast<uint32_t>(mVertices.size());
+      const glm::ivec4 grid(layout.origins[i], grids[i].cells);
+      for (int c = 0; c < 4; ++c) {
+        mVertices.push_back(
+            {billboards[i]->corner(c), billboards[i]->normal, glm::vec2(kU[c], kV[c]), grid});
+      }
+      for (uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) mIndices.push_back(base + k);
+    }
+    const LeafImageSampler sampler(tree);
+    mLeafImages = buildOrientedLeafImages(tree, sampler, mParams.bins, mParams.leafImageSize);
+    mReport = {{"clouds", describeClouds(clouds)}, {"index_atlas", {layout.width, layout.height}},
+               {"filled_cells", filled},           {"leaf_images", mLeafImages.size()},
+               {"cell_length", cellLength},        {"leaves_shown_finest_level", leavesKept},
+               {"leaves", tree.leaves.size()}};
+  }
+
+  void upload(gl::Device& device) override {
+    using gl::MemoryCategory;
+    mVbo = device.createBuffer(MemoryCategory::kGeometry, GL_ARRAY_BUFFER, mVertices,
+                               "billboard vertices");
+    mIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mIndices,
+                               "billboard indices");
+    const gl::Api& g = gl::api();
+    GLuint vao = 0;
+    g.GenVertexArrays(1, &vao);
+    mVao = gl::VertexArray{gl::GlName<gl::deleteVertexArrayName>(vao)};
+    g.BindVertexArray(vao);
+    g.BindBuffer(GL_ARRAY_BUFFER, mVbo.id());
+    g.EnableVertexAttribArray(0);
+    g.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                          reinterpret_cast<const void*>(offsetof(Vertex, position)));
+    g.EnableVertexAttribArray(1);
+    g.VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                          reinterpret_cast<const void*>(offsetof(Vertex, normal)));
+    g.EnableVertexAttribArray(2);
+    g.VertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                          reinterpret_cast<const void*>(offsetof(Vertex, uv)));
+    g.EnableVertexAttribArray(3);
+    g.VertexAttribIPointer(3, 4, GL_INT, sizeof(Vertex),
+                           reinterpret_cast<const void*>(offsetof(Vertex, grid)));
+    g.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, mIbo.id());
+    g.BindVertexArray(0);
+    g.BindBuffer(GL_ARRAY_BUFFER, 0);
+    mIndexTexture =
+        device.createTexture({GL_TEXTURE_2D, mIndexSize.x, mIndexSize.y, 1, GL_R16UI, false,
+                              MemoryCategory::kTexture, "single-leaf index atlas"});
+    device.uploadTexture(mIndexTexture, GL_RED_INTEGER, GL_UNSIGNED_SHORT, mIndex.data());
+    gl::setTextureSampling(mIndexTexture, false, false);
+    mLeavesTexture = uploadLeafImageArray(device, mLeafImages, "oriented leaf images");
+    mProgram = device.createProgram(
+        {gl::embeddedShader("methods/single_leaf_indirect/single_leaf_indirect.vert"),
+         gl::embeddedShader("methods/single_leaf_indirect/single_leaf_indirect.frag")});
+    mLod.attach(device, device.owner() + "/frame");
+    if (mParams.drawWood) mWood.upload(device, true);
+  }
+
+  void draw(const FrameContext& frame, std::span<const Instance> instances) override {
+    if (instances.empty()) return;
+    mLod.update(frame, instances, mTreeBounds, mParams.cloud.thresholds());
+    const gl::Api& g = gl::api();
+    mProgram.use();
+    setFrameUniforms(mProgram, frame);
+    mProgram.set("uCells", 0);
+    mProgram.set("uLeaves", 1);
+    g.ActiveTexture(GL_TEXTURE0);
+    g.BindTexture(GL_TEXTURE_2D, mIndexTexture.id());
+    g.ActiveTexture(GL_TEXTURE1);
+    g.BindTexture(GL_TEXTURE_2D_ARRAY, mLeavesTexture.id());
+    g.ActiveTexture(GL_TEXTURE0);
+    g.BindVertexArray(mVao.id());
+    const auto& ranges = mLod.ranges();
+    for (size_t level = 0; level < ranges.size() && level < mLevelRanges.size(); ++level) {
+      if (ranges[level].count == 0) continue;
+      bindInstanceMatrices(mLod.buffer(), 4, ranges[level].first);
+      g.DrawElementsInstanced(
+          GL_TRIANGLES, static_cast<GLsizei>(mLevelRanges[level].count), GL_UNSIGNED_INT,
+          reinterpret_cast<const void*>(sizeof(uint32_t) * mLevelRanges[level].first),
+          ranges[level].count);
+    }
+    g.BindVertexArray(0);
+    if (mParams.drawWood)
+      mWood.draw(frame, frame.instanceBuffer, 0, static_cast<GLsizei>(instances.size()));
+  }
+
+  nlohmann::json effectiveParams() const override { return writeParams(mParams); }
+  nlohmann::json bakeReport() const override { return mReport; }
+
+  void save(AssetFolder& asset) const override {
+    auto& header = asset.header();
+    header["method"] = "single_leaf_indirect";
+    header["params"] = effectiveParams();
+    header["report"] = mReport;
+    header["bounds"] = {mTreeBounds.min.x, mTreeBounds.min.y, mTreeBounds.min.z,
+                        mTreeBounds.max.x, mTreeBounds.max.y, mTreeBounds.max.z};
+    header["levels"] = nlohmann::json::array();
+    for (const LevelRange& r : mLevelRanges) header["levels"].push_back({r.first, r.count});
+    header["index_size"] = {mIndexSize.x, mIndexSize.y};
+    header["leaf_images"] = mLeafImages.size();
+    asset.writeBlob("vertices.bin", mVertices);
+    asset.writeBlob("indices.bin", mIndices);
+    asset.writeBlob("cell_index.bin", mIndex);
+    for (size_t i = 0; i < mLeafImages.size(); ++i)
+      asset.writeImage(fmt::format("leaf_image_{}.png", i), mLeafImages[i]);
+    mWood.save(asset);
+    asset.writeHeader();
+  }
+
+  void load(AssetFolder& asset) override {
+    asset.readHeader();
+    const auto& header = asset.header();
+    const std::string folder = asset.folder().string();
+    if (header.value("method", "") != "single_leaf_indirect")
+      throwInputError("{}: not a single_leaf_indirect asset", folder);
+    const auto& b = header.at("bounds");
+    mTreeBounds.min = {b[0], b[1], b[2]};
+    mTreeBounds.max = {b[3], b[4], b[5]};
+    mReport = header.at("report");
+    mLevelRanges.clear();
+    for (const auto& r : header.at("levels")) mLevelRanges.push_back({r[0], r[1]});
+    mIndexSize = {header.at("index_size")[0], header.at("index_size")[1]};
+    mVertices = asset.readBlobAs<Vertex>("vertices.bin");
+    mIndices = asset.readBlobAs<uint32_t>("indices.bin");
+    mIndex = asset.readBlobAs<uint16_t>("cell_index.bin");
+    mLeafImages.clear();
+    for (size_t i = 0; i < header.at("leaf_images").get<size_t>(); ++i)
+      mLeafImages.push_back(asset.readImage(fmt::format("leaf_image_{}.png", i)));
+    if (mIndex.size() != size_t(mIndexSize.x) * mIndexSize.y)
+      throwInputError("{}: cell index size mismatch", folder);
+    for (uint16_t reference : mIndex) {
+      if (reference > mLeafImages.size())
+        throwInputError("{}: cell names leaf image {} of {}", folder, reference,
+                        mLeafImages.size());
+    }
+    for (uint32_t index : mIndices) {
+      if (index >= mVertices.size()) throwInputError("{}: corrupt billboard indices", folder);
+    }
+    mWood.load(asset);
+  }
+
+ private:
+  struct LevelRange {
+    uint32_t first = 0;
+    uint32_t count = 0;
+  };
+
+  SingleLeafParams mParams;
+  Aabb mTreeBounds;
+  nlohmann::json mReport;
+  std::vector<LevelRange> mLevelRanges;
+  std::vector<Vertex> mVertices;
+  std::vector<uint32_t> mIndices;
+  glm::ivec2 mIndexSize{1, 1};
+  std::vector<uint16_t> mIndex;
+  std::vector<ImageRgba8> mLeafImages;
+  gl::Buffer mVbo, mIbo;
+  gl::VertexArray mVao;
+  gl::Texture mIndexTexture, mLeavesTexture;
+  gl::Program mProgram;
+  LodInstances mLod;
+  WoodRenderer mWood;
+};
+
+}  // namespace
+
+void registerSingleLeafIndirect(MethodRegistry& registry) {
+  registry.add(
+      {"single_leaf_indirect", "one leaf image per billboard grid cell (García et al. 2005)",
+       [](const nlohmann::json& params, const std::string& path) -> std::unique_ptr<Method> {
+         return std::make_unique<SingleLeafIndirect>(
+             readParams<SingleLeafParams>(params, path, "single_leaf_indirect"));
+       }});
+}
+
+}  // namespace canopy

@@ -1,0 +1,19 @@
+#version 430 core
+layout(location = 0) in vec3 inPosition;
+layout(location = 1) in vec3 inNormal;
+layout(location = 2) in vec2 inUv;      // over the billboard, [0, 1]²
+layout(location = 3) in ivec4 inGrid;   // first cell in the index atlas (xy), cells (zw)
+layout(location = 4) in mat4 inModel;   // per instance, locations 4..7
+
+uniform mat4 uViewProjection;
+
+out vec3 vNormal;
+out vec2 vUv;
+flat out ivec4 vGrid;
+
+void main() {
+  vNormal = mat3(inModel) * inNormal;
+  vUv = inUv;
+  vGrid = inGrid;
+  gl_Position = uViewProjection * (inModel * vec4(inPosition, 1.0));
+}
