@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+
 #include "common/gl/api.h"
 #include "common/gl/device.h"
 #include "test_support.h"
@@ -73,8 +76,21 @@ TEST(Shaders, CompileErrorsNameTheFileAndLine) {
   }
 }
 
-TEST(Shaders, EveryEmbeddedShaderIsFoundByPath) {
-  EXPECT_FALSE(embeddedShader("methods/polygonal/polygonal.vert").text.empty());
+TEST(Shaders, EveryShaderFileIsEmbeddedVerbatim) {
+  namespace fs = std::filesystem;
+  int found = 0;
+  for (const char* folder : {"common", "methods"}) {
+    for (const auto& entry : fs::recursive_directory_iterator(fs::path(CANOPY_SOURCE_DIR) / folder)) {
+      const std::string extension = entry.path().extension().string();
+      if (extension != ".vert" && extension != ".frag") continue;
+      const std::string relative = fs::relative(entry.path(), CANOPY_SOURCE_DIR).string();
+      std::ifstream in(entry.path(), std::ios::binary);
+      const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      EXPECT_EQ(embeddedShader(relative).text, text) << relative;
+      ++found;
+    }
+  }
+  EXPECT_GE(found, 4);
   EXPECT_THROW(embeddedShader("methods/none.frag"), std::logic_error);
 }
 
