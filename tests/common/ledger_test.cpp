@@ -80,12 +80,14 @@ TEST(Shaders, EveryShaderFileIsEmbeddedVerbatim) {
   namespace fs = std::filesystem;
   int found = 0;
   for (const char* folder : {"common", "methods"}) {
-    for (const auto& entry : fs::recursive_directory_iterator(fs::path(CANOPY_SOURCE_DIR) / folder)) {
+    for (const auto& entry :
+         fs::recursive_directory_iterator(fs::path(CANOPY_SOURCE_DIR) / folder)) {
       const std::string extension = entry.path().extension().string();
       if (extension != ".vert" && extension != ".frag") continue;
       const std::string relative = fs::relative(entry.path(), CANOPY_SOURCE_DIR).string();
       std::ifstream in(entry.path(), std::ios::binary);
-      const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      const std::string text((std::istreambuf_iterator<char>(in)),
+                             std::istreambuf_iterator<char>());
       EXPECT_EQ(embeddedShader(relative).text, text) << relative;
       ++found;
     }
