@@ -65,11 +65,11 @@ class BillboardCloudMethod final : public Method {
         sizes.push_back({texels(billboard.halfExtents.x), texels(billboard.halfExtents.y)});
       }
     }
-    const AtlasLayout layout = packAtlas(sizes, kAtlasPadding, kAtlasAlignment);
-    if (layout.width > kMaxAtlas || layout.height > kMaxAtlas) {
+    const AtlasLayout preview = packAtlas(sizes, kAtlasPadding, kAtlasAlignment);
+    if (preview.width > kMaxAtlas || preview.height > kMaxAtlas) {
       throwInputError(
           "billboard_cloud: parameter 'density' = {} needs a {}x{} atlas, above {}; lower it",
-          mParams.density, layout.width, layout.height, kMaxAtlas);
+          mParams.density, preview.width, preview.height, kMaxAtlas);
     }
     const LeafImageSampler sampler(tree);
     std::vector<ImageRgba8> images(billboards.size());
@@ -77,28 +77,18 @@ class BillboardCloudMethod final : public Method {
       images[i] = captureLeavesOrthographic(tree, sampler, billboards[i]->leaves, *billboards[i],
                                             sizes[i].x, sizes[i].y, mParams.supersample);
     });
-    mAtlas = ImageRgba8(layout.width, layout.height);
-    for (size_t i = 0; i < images.size(); ++i) {
-      for (int y = 0; y < sizes[i].y; ++y) {
-        std::copy_n(images[i].at(0, y), size_t(sizes[i].x) * 4,
-                    mAtlas.at(layout.origins[i].x, layout.origins[i].y + y));
-      }
-    }
-    dilateTransparentColors(mAtlas, kAtlasAlignment);
+    const ImageAtlas atlas = composeAtlas(images, kAtlasPadding, kAtlasAlignment);
+    mAtlas = atlas.image;
     mVertices.clear();
     mIndices.clear();
     for (size_t i = 0; i < billboards.size(); ++i) {
-      const Billboard& billboard = *billboards[i];
       const auto base = static_cast<uint32_t>(mVertices.size());
-      static constexpr int kU[4] = {0, 1, 1, 0}, kV[4] = {0, 0, 1, 1};
-      for (int c = 0; c < 4; ++c) {
-        const glm::vec2 texel =
-            glm::vec2(layout.origins[i]) + glm::vec2(kU[c] * sizes[i].x, kV[c] * sizes[i].y);
-        mVertices.push_back({billboard.corner(c), billboard.normal,
-                             texel / glm::vec2(layout.width, layout.height)});
-      }
+      for (int c = 0; c < 4; ++c)
+        mVertices.push_back(
+            {billboards[i]->corner(c), billboards[i]->normal, atlas.cornerUv(i, c)});
       for (uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) mIndices.push_back(base + k);
     }
+    const AtlasLayout& layout = atlas.layout;
     mReport["atlas"] = {layout.width, layout.height};
   }
 
@@ -108,23 +98,11 @@ class BillboardCloudMethod final : public Method {
                                "billboard vertices");
     mIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mIndices,
                                "billboard indices");
-    mAtlasTexture =
-        device.createTexture({GL_TEXTURE_2D, mAtlas.width, mAtlas.height, 1, GL_SRGB8_ALPHA8,
-                              mParams.mipmaps, MemoryCategory::kTexture, "billboard atlas"});
-    if (mParams.mipmaps) {
-      const std::vector<ImageRgba8> levels = buildCoveragePreservingMips(mAtlas);
-      for (size_t level = 0; level < levels.size(); ++level) {
-        device.uploadTextureLevel(mAtlasTexture, static_cast<int>(level), GL_RGBA, GL_UNSIGNED_BYTE,
-                                  levels[level].pixels.data());
-      }
-    } else {
-      device.uploadTexture(mAtlasTexture, GL_RGBA, GL_UNSIGNED_BYTE, mAtlas.pixels.data());
-    }
-    gl::setTextureSampling(mAtlasTexture, true, false);
+    mAtlasTexture = uploadAlphaTestedTexture(device, mAtlas, mParams.mipmaps, "billboard atlas");
     mVao = makeMeshVertexArray(mVbo, mIbo);
     mProgram =
-        device.createProgram({gl::embeddedShader("methods/billboard_cloud/billboard_cloud.vert"),
-                              gl::embeddedShader("methods/billboard_cloud/billboard_cloud.frag")});
+        device.createProgram({gl::embeddedShader("methods/common/mesh.vert"),
+                              gl::embeddedShader("methods/common/alpha_tested_texture.frag")});
     mLod.attach(device, device.owner() + "/frame");
     if (mParams.drawWood) mWood.upload(device, true);
   }

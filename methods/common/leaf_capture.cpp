@@ -186,6 +186,28 @@ AtlasLayout packAtlas(const std::vector<glm::ivec2>& sizes, int padding, int ali
   return layout;
 }
 
+glm::vec2 ImageAtlas::cornerUv(size_t index, int corner) const {
+  static constexpr int kU[4] = {0, 1, 1, 0}, kV[4] = {0, 0, 1, 1};
+  const glm::vec2 texel = glm::vec2(layout.origins[index]) +
+                          glm::vec2(kU[corner] * sizes[index].x, kV[corner] * sizes[index].y);
+  return texel / glm::vec2(layout.width, layout.height);
+}
+
+ImageAtlas composeAtlas(const std::vector<ImageRgba8>& images, int padding, int alignment) {
+  ImageAtlas atlas;
+  for (const ImageRgba8& image : images) atlas.sizes.push_back({image.width, image.height});
+  atlas.layout = packAtlas(atlas.sizes, padding, alignment);
+  atlas.image = ImageRgba8(atlas.layout.width, atlas.layout.height);
+  for (size_t i = 0; i < images.size(); ++i) {
+    for (int y = 0; y < images[i].height; ++y) {
+      std::copy_n(images[i].at(0, y), size_t(images[i].width) * 4,
+                  atlas.image.at(atlas.layout.origins[i].x, atlas.layout.origins[i].y + y));
+    }
+  }
+  dilateTransparentColors(atlas.image, alignment);
+  return atlas;
+}
+
 void dilateTransparentColors(ImageRgba8& image, int passes) {
   std::vector<uint8_t> filled(size_t(image.width) * image.height);
   for (size_t i = 0; i < filled.size(); ++i) filled[i] = image.pixels[i * 4 + 3] > 0;

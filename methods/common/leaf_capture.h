@@ -49,6 +49,16 @@ struct AtlasLayout {
 };
 AtlasLayout packAtlas(const std::vector<glm::ivec2>& sizes, int padding, int alignment);
 
+// Images packed into one atlas (packAtlas), transparent texels dilated by `alignment` texels.
+struct ImageAtlas {
+  ImageRgba8 image;
+  AtlasLayout layout;
+  std::vector<glm::ivec2> sizes;
+  // Atlas uv of corner i (CCW from (−,−)) of image `index`.
+  glm::vec2 cornerUv(size_t index, int corner) const;
+};
+ImageAtlas composeAtlas(const std::vector<ImageRgba8>& images, int padding, int alignment);
+
 // Gives fully transparent texels the colour of their nearest covered neighbours (up to
 // `passes` texels away), so bilinear and mip filtering near leaf edges do not pull in black.
 void dilateTransparentColors(ImageRgba8& image, int passes);

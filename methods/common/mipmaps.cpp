@@ -76,3 +76,25 @@ std::vector<ImageRgba8> buildCoveragePreservingMips(const ImageRgba8& base, floa
 }
 
 }  // namespace canopy
+
+namespace canopy {
+
+gl::Texture uploadAlphaTestedTexture(gl::Device& device, const ImageRgba8& image, bool mipmaps,
+                                     const char* label) {
+  gl::Texture texture =
+      device.createTexture({GL_TEXTURE_2D, image.width, image.height, 1, GL_SRGB8_ALPHA8, mipmaps,
+                            gl::MemoryCategory::kTexture, label});
+  if (mipmaps) {
+    const std::vector<ImageRgba8> levels = buildCoveragePreservingMips(image);
+    for (size_t level = 0; level < levels.size(); ++level) {
+      device.uploadTextureLevel(texture, static_cast<int>(level), GL_RGBA, GL_UNSIGNED_BYTE,
+                                levels[level].pixels.data());
+    }
+  } else {
+    device.uploadTexture(texture, GL_RGBA, GL_UNSIGNED_BYTE, image.pixels.data());
+  }
+  gl::setTextureSampling(texture, true, false);
+  return texture;
+}
+
+}  // namespace canopy

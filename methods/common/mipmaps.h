@@ -2,6 +2,7 @@
 
 #include <vector>
 
+#include "common/gl/device.h"
 #include "common/image.h"
 
 namespace canopy {
@@ -13,5 +14,13 @@ namespace canopy {
 // vanish.
 std::vector<ImageRgba8> buildCoveragePreservingMips(const ImageRgba8& base,
                                                     float alphaThreshold = 0.5f);
+
+}  // namespace canopy
+
+namespace canopy {
+
+// A 2D sRGB texture with the chain above (or level 0 only when !mipmaps), linear filtering.
+gl::Texture uploadAlphaTestedTexture(gl::Device& device, const ImageRgba8& image, bool mipmaps,
+                                     const char* label);
 
 }  // namespace canopy

@@ -1,6 +1,6 @@
 #version 430 core
-// A billboard texel: alpha test at 0.5 (the captured coverage), albedo or two-sided Lambert with
-// the billboard's plane normal (the classic method keeps no per-leaf normals).
+// A textured billboard (the classic billboard cloud, the multi-layer method's far level): alpha
+// test at 0.5 on the captured coverage, albedo or two-sided Lambert with the plane normal.
 in vec3 vNormal;
 in vec2 vUv;
 
