@@ -2,6 +2,7 @@
 
 #include "methods/billboard_cloud/billboard_cloud.h"
 #include "methods/method.h"
+#include "methods/multilayer_indirect/multilayer_indirect.h"
 #include "methods/polygonal/polygonal.h"
 #include "methods/single_leaf_indirect/single_leaf_indirect.h"
 
@@ -36,6 +37,7 @@ const MethodRegistry& builtinMethods() {
     registerPolygonal(r);
     registerBillboardCloud(r);
     registerSingleLeafIndirect(r);
+    registerMultilayerIndirect(r);
     return r;
   }();
   return registry;

@@ -1,0 +1,391 @@
+#include "methods/multilayer_indirect/multilayer_indirect.h"
+
+#include <tbb/parallel_for.h>
+
+#include "common/config.h"
+#include "methods/common/cloud_params.h"
+#include "methods/common/leaf_capture.h"
+#include "methods/common/leaf_orientations.h"
+#include "methods/common/lod_instances.h"
+#include "methods/common/mesh.h"
+#include "methods/common/mipmaps.h"
+#include "methods/multilayer_indirect/layered_billboard.h"
+
+namespace canopy {
+namespace {
+
+struct MultilayerParams {
+  CloudParams cloud;
+  int hashResolution = 32;       // hash cells along each billboard's longer side
+  int maxLayers = 16;            // longest list kept per cell (front-most first); at most 255
+  std::string sprite = "paper";  // point-sprite size: "paper" (§4.2 formula) or "bounds"
+  OrientationBins bins;          // quantized orientations of the Leaves Texture
+  int leafImageSize = 64;        // texels per side of each oriented leaf image
+  float lodFactor = 1.0f;        // shader LoD: entries = factor × hash-texel diagonal (px); 0: all
+  int lowResTexelsPerCell = 1;   // low-resolution texture texels per hash cell side
+  bool drawWood = true;          // draw the trunk and branches as geometry
+
+  template <class Visitor>
+  void visit(Visitor& v) {
+    cloud.visit(v);
+    v("hash_resolution", hashResolution, 1, 1024);
+    v("max_layers", maxLayers, 1, 255);
+    v("sprite", sprite, {"paper", "bounds"});
+    v("rotations", bins.rotations, 1, 64);
+    v("tilts", bins.tilts, 1, 8);
+    v("leaf_image_size", leafImageSize, 4, 512);
+    v("lod_factor", lodFactor, 0.0f, 1000.0f);
+    v("lowres_texels_per_cell", lowResTexelsPerCell, 1, 16);
+    v("wood", drawWood);
+  }
+};
+
+struct Vertex {
+  glm::vec3 position;
+  glm::vec3 normal;
+  glm::vec2 lowResUv;  // location 2: the far level's mesh.vert reads it as its uv
+  glm::vec2 uv;        // over the billboard
+  glm::ivec4 hash;     // first cell in the hash atlas, cells
+  glm::vec2 halfExtents;
+};
+
+constexpr int kListsWidth = 2048;
+constexpr int kFarLevel = 2;  // the K/10 cloud draws the low-resolution texture only (§5.1, §6)
+
+class MultilayerIndirect final : public Method {
+ public:
+  explicit MultilayerIndirect(MultilayerParams params) : mParams(std::move(params)) {
+    mParams.cloud.validate("multilayer_indirect");
+  }
+
+  void bake(const Tree& tree, BakeContext& ctx) override {
+    mTreeBounds = tree.bounds;
+    mWood.bake(tree);
+    const uint32_t imageCount = orientedImageCount(tree.leafTextures.size(), mParams.bins);
+    if (imageCount > 2048) {
+      throwInputError(
+          "multilayer_indirect: {} oriented leaf images (textures × 2 × tilts × rotations) exceed "
+          "2048; "
+          "lower 'rotations' or 'tilts'",
+          imageCount);
+    }
+    const auto clouds = buildBillboardCloudFamily(tree, mParams.cloud.clustering,
+                                                  mParams.cloud.divisors(), ctx.seed);
+    LayeringParams layering;
+    layering.hashResolution = mParams.hashResolution;
+    layering.maxLayers = mParams.maxLayers;
+    layering.sprite = parseSpriteRule(mParams.sprite);
+    layering.bins = mParams.bins;
+    std::vector<const Billboard*> billboards;
+    mLevelRanges.clear();
+    for (const BillboardCloud& cloud : clouds) {
+      mLevelRanges.push_back({static_cast<uint32_t>(billboards.size() * 6),
+                              static_cast<uint32_t>(cloud.billboards.size() * 6)});
+      for (const Billboard& billboard : cloud.billboards) billboards.push_back(&billboard);
+    }
+    std::vector<LayeredBillboard> layered(billboards.size());
+    tbb::parallel_for(size_t(0), billboards.size(), [&](size_t i) {
+      layered[i] = buildLayeredBillboard(tree, *billboards[i], layering);
+    });
+    const LeafImageSampler sampler(tree);
+    mLeafImages = buildOrientedLeafImages(tree, sampler, mParams.bins, mParams.leafImageSize);
+
+    // Hash atlas and lists atlas (§6).
+    std::vector<glm::ivec2> cellSizes;
+    for (const LayeredBillboard& l : layered) cellSizes.push_back(l.cells);
+    const AtlasLayout hashLayout = packAtlas(cellSizes, 0, 1);
+    mHashSize = {hashLayout.width, hashLayout.height};
+    mHash.assign(size_t(hashLayout.width) * hashLayout.height, 0u);
+    mLists.clear();
+    size_t maxList = 0, dropped = 0, finestEntries = 0;
+    for (size_t i = 0; i < layered.size(); ++i) {
+      const LayeredBillboard& l = layered[i];
+      const auto base = static_cast<uint32_t>(mLists.size() / 4);
+      for (const LayerEntry& e : l.entries)
+        mLists.insert(mLists.end(), {e.position.x, e.position.y, e.size, float(e.image)});
+      for (int y = 0; y < l.cells.y; ++y) {
+        for (int x = 0; x < l.cells.x; ++x) {
+          const size_t cell = size_t(y) * l.cells.x + x;
+          if (l.listLength[cell] == 0) continue;
+          maxList = std::max<size_t>(maxList, l.listLength[cell]);
+          mHash[size_t(hashLayout.origins[i].y + y) * hashLayout.width + hashLayout.origins[i].x +
+                x] = ((base + l.listStart[cell]) << 8) | l.listLength[cell];
+        }
+      }
+      dropped += l.droppedEntries;
+      if (i < clouds[0].billboards.size()) finestEntries += l.entries.size();
+    }
+    if (mLists.size() / 4 >= (1u << 24))
+      throwInputError("multilayer_indirect: more than 2^24 list entries");
+    mListsHeight = static_cast<int>((mLists.size() / 4 + kListsWidth - 1) / kListsWidth);
+    mLists.resize(size_t(kListsWidth) * std::max(mListsHeight, 1) * 4, 0.0f);
+    mListsHeight = std::max(mListsHeight, 1);
+
+    // The low-resolution texture, baked from the layered representation (§5.1).
+    std::vector<ImageRgba8> lowRes(billboards.size());
+    tbb::parallel_for(size_t(0), billboards.size(),
+                      [&](size_t i) { lowRes[i] = captureLayers(*billboards[i], layered[i]); });
+    const ImageAtlas atlas = composeAtlas(lowRes, 4, 8);
+    mLowRes = atlas.image;
+
+    mVertices.clear();
+    mIndices.clear();
+    static constexpr int kU[4] = {0, 1, 1, 0}, kV[4] = {0, 0, 1, 1};
+    for (size_t i = 0; i < billboards.size(); ++i) {
+      const auto base = static_cast<uint32_t>(mVertices.size());
+      for (int c = 0; c < 4; ++c) {
+        mVertices.push_back({billboards[i]->corner(c), billboards[i]->normal, atlas.cornerUv(i, c),
+                             glm::vec2(kU[c], kV[c]),
+                             glm::ivec4(hashLayout.origins[i], layered[i].cells),
+                             billboards[i]->halfExtents});
+      }
+      for (uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) mIndices.push_back(base + k);
+    }
+    mReport = {{"clouds", describeClouds(clouds)},
+               {"hash_atlas", {hashLayout.width, hashLayout.height}},
+               {"list_entries", mLists.size() / 4},
+               {"list_entries_finest_level", finestEntries},
+               {"longest_list", maxList},
+               {"dropped_entries", dropped},
+               {"leaf_images", mLeafImages.size()},
+               {"lowres_atlas", {atlas.layout.width, atlas.layout.height}}};
+  }
+
+  void upload(gl::Device& device) override {
+    using gl::MemoryCategory;
+    mVbo = device.createBuffer(MemoryCategory::kGeometry, GL_ARRAY_BUFFER, mVertices,
+                               "billboard vertices");
+    mIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mIndices,
+                               "billboard indices");
+    makeVertexArray();
+    mHashTexture = device.createTexture({GL_TEXTURE_2D, mHashSize.x, mHashSize.y, 1, GL_R32UI,
+                                         false, MemoryCategory::kTexture, "hash atlas"});
+    device.uploadTexture(mHashTexture, GL_RED_INTEGER, GL_UNSIGNED_INT, mHash.data());
+    gl::setTextureSampling(mHashTexture, false, false);
+    mListsTexture = device.createTexture({GL_TEXTURE_2D, kListsWidth, mListsHeight, 1, GL_RGBA16F,
+                                          false, MemoryCategory::kTexture, "lists atlas"});
+    device.uploadTexture(mListsTexture, GL_RGBA, GL_FLOAT, mLists.data());
+    gl::setTextureSampling(mListsTexture, false, false);
+    mLeavesTexture = uploadLeafImageArray(device, mLeafImages, "oriented leaf images");
+    mLowResTexture = uploadAlphaTestedTexture(device, mLowRes, true, "low-resolution atlas");
+    mProgram = device.createProgram(
+        {gl::embeddedShader("methods/multilayer_indirect/multilayer_indirect.vert"),
+         gl::embeddedShader("methods/multilayer_indirect/multilayer_indirect.frag")});
+    mFarProgram =
+        device.createProgram({gl::embeddedShader("methods/common/mesh.vert"),
+                              gl::embeddedShader("methods/common/alpha_tested_texture.frag")});
+    mLod.attach(device, device.owner() + "/frame");
+    if (mParams.drawWood) mWood.upload(device, true);
+  }
+
+  void draw(const FrameContext& frame, std::span<const Instance> instances) override {
+    if (instances.empty()) return;
+    mLod.update(frame, instances, mTreeBounds, mParams.cloud.thresholds());
+    const gl::Api& g = gl::api();
+    g.BindVertexArray(mVao.id());
+    const auto& ranges = mLod.ranges();
+    for (size_t level = 0; level < ranges.size() && level < mLevelRanges.size(); ++level) {
+      if (ranges[level].count == 0) continue;
+      const bool far = level >= kFarLevel;
+      const gl::Program& program = far ? mFarProgram : mProgram;
+      program.use();
+      setFrameUniforms(program, frame);
+      if (far) {
+        program.set("uAtlas", 0);
+        g.ActiveTexture(GL_TEXTURE0);
+        g.BindTexture(GL_TEXTURE_2D, mLowResTexture.id());
+      } else {
+        bindLayeredTextures(program);
+      }
+      bindInstanceMatrices(mLod.buffer(), 4, ranges[level].first);
+      g.DrawElementsInstanced(
+          GL_TRIANGLES, static_cast<GLsizei>(mLevelRanges[level].count), GL_UNSIGNED_INT,
+          reinterpret_cast<const void*>(sizeof(uint32_t) * mLevelRanges[level].first),
+          ranges[level].count);
+    }
+    g.ActiveTexture(GL_TEXTURE0);
+    g.BindVertexArray(0);
+    if (mParams.drawWood)
+      mWood.draw(frame, frame.instanceBuffer, 0, static_cast<GLsizei>(instances.size()));
+  }
+
+  nlohmann::json effectiveParams() const override { return writeParams(mParams); }
+  nlohmann::json bakeReport() const override { return mReport; }
+
+  void save(AssetFolder& asset) const override {
+    auto& header = asset.header();
+    header["method"] = "multilayer_indirect";
+    header["params"] = effectiveParams();
+    header["report"] = mReport;
+    header["bounds"] = {mTreeBounds.min.x, mTreeBounds.min.y, mTreeBounds.min.z,
+                        mTreeBounds.max.x, mTreeBounds.max.y, mTreeBounds.max.z};
+    header["levels"] = nlohmann::json::array();
+    for (const LevelRange& r : mLevelRanges) header["levels"].push_back({r.first, r.count});
+    header["hash_size"] = {mHashSize.x, mHashSize.y};
+    header["lists_height"] = mListsHeight;
+    header["leaf_images"] = mLeafImages.size();
+    asset.writeBlob("vertices.bin", mVertices);
+    asset.writeBlob("indices.bin", mIndices);
+    asset.writeBlob("hash.bin", mHash);
+    asset.writeBlob("lists.bin", mLists);
+    for (size_t i = 0; i < mLeafImages.size(); ++i)
+      asset.writeImage(fmt::format("leaf_image_{}.png", i), mLeafImages[i]);
+    asset.writeImage("lowres.png", mLowRes);
+    mWood.save(asset);
+    asset.writeHeader();
+  }
+
+  void load(AssetFolder& asset) override {
+    asset.readHeader();
+    const auto& header = asset.header();
+    const std::string folder = asset.folder().string();
+    if (header.value("method", "") != "multilayer_indirect")
+      throwInputError("{}: not a multilayer_indirect asset", folder);
+    const auto& b = header.at("bounds");
+    mTreeBounds.min = {b[0], b[1], b[2]};
+    mTreeBounds.max = {b[3], b[4], b[5]};
+    mReport = header.at("report");
+    mLevelRanges.clear();
+    for (const auto& r : header.at("levels")) mLevelRanges.push_back({r[0], r[1]});
+    mHashSize = {header.at("hash_size")[0], header.at("hash_size")[1]};
+    mListsHeight = header.at("lists_height");
+    mVertices = asset.readBlobAs<Vertex>("vertices.bin");
+    mIndices = asset.readBlobAs<uint32_t>("indices.bin");
+    mHash = asset.readBlobAs<uint32_t>("hash.bin");
+    mLists = asset.readBlobAs<float>("lists.bin");
+    mLeafImages.clear();
+    for (size_t i = 0; i < header.at("leaf_images").get<size_t>(); ++i)
+      mLeafImages.push_back(asset.readImage(fmt::format("leaf_image_{}.png", i)));
+    mLowRes = asset.readImage("lowres.png");
+    if (mHash.size() != size_t(mHashSize.x) * mHashSize.y ||
+        mLists.size() != size_t(kListsWidth) * mListsHeight * 4) {
+      throwInputError("{}: hash or lists blob has the wrong size", folder);
+    }
+    for (uint32_t packed : mHash) {
+      if (packed != 0 && size_t(packed >> 8) + (packed & 255u) > mLists.size() / 4)
+        throwInputError("{}: hash cell points past the lists", folder);
+    }
+    for (size_t i = 3; i < mLists.size(); i += 4) {
+      if (mLists[i] < 0.0f || mLists[i] >= float(mLeafImages.size()) + 0.5f)
+        throwInputError("{}: list entry names a missing leaf image", folder);
+    }
+    for (uint32_t index : mIndices) {
+      if (index >= mVertices.size()) throwInputError("{}: corrupt billboard indices", folder);
+    }
+    mWood.load(asset);
+  }
+
+ private:
+  struct LevelRange {
+    uint32_t first = 0;
+    uint32_t count = 0;
+  };
+
+  // What the full walk shows from the billboard's front, at lowres_texels_per_cell texels per
+  // hash cell, 4×4 samples per texel: colour (linear mean) and coverage.
+  ImageRgba8 captureLayers(const Billboard& billboard, const LayeredBillboard& layered) const {
+    constexpr int kSamples = 4;
+    const glm::ivec2 size = layered.cells * mParams.lowResTexelsPerCell;
+    ImageRgba8 image(size.x, size.y);
+    for (int y = 0; y < size.y; ++y) {
+      for (int x = 0; x < size.x; ++x) {
+        glm::vec3 sum(0.0f);
+        int covered = 0;
+        for (int sy = 0; sy < kSamples; ++sy) {
+          for (int sx = 0; sx < kSamples; ++sx) {
+            const glm::vec2 unit((x + (sx + 0.5f) / kSamples) / size.x,
+                                 (y + (sy + 0.5f) / kSamples) / size.y);
+            const glm::vec2 point = (unit * 2.0f - 1.0f) * billboard.halfExtents;
+            const auto hit = walkLayers(layered, billboard, mLeafImages, mParams.bins, point, true);
+            if (!hit) continue;
+            sum += glm::vec3(srgbToLinear(hit->color.r), srgbToLinear(hit->color.g),
+                             srgbToLinear(hit->color.b));
+            ++covered;
+          }
+        }
+        uint8_t* out = image.at(x, y);
+        if (covered > 0)
+          for (int c = 0; c < 3; ++c) out[c] = encodeSrgb8(sum[c] / float(covered));
+        out[3] = static_cast<uint8_t>(std::lround(255.0f * covered / float(kSamples * kSamples)));
+      }
+    }
+    return image;
+  }
+
+  void makeVertexArray() {
+    const gl::Api& g = gl::api();
+    GLuint vao = 0;
+    g.GenVertexArrays(1, &vao);
+    mVao = gl::VertexArray{gl::GlName<gl::deleteVertexArrayName>(vao)};
+    g.BindVertexArray(vao);
+    g.BindBuffer(GL_ARRAY_BUFFER, mVbo.id());
+    const auto attribute = [&](GLuint location, GLint components, size_t offset) {
+      g.EnableVertexAttribArray(location);
+      g.VertexAttribPointer(location, components, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                            reinterpret_cast<const void*>(offset));
+    };
+    attribute(0, 3, offsetof(Vertex, position));
+    attribute(1, 3, offsetof(Vertex, normal));
+    attribute(2, 2, offsetof(Vertex, lowResUv));
+    attribute(3, 2, offsetof(Vertex, uv));
+    g.EnableVertexAttribArray(8);
+    g.VertexAttribIPointer(8, 4, GL_INT, sizeof(Vertex),
+                           reinterpret_cast<const void*>(offsetof(Vertex, hash)));
+    attribute(9, 2, offsetof(Vertex, halfExtents));
+    g.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, mIbo.id());
+    g.BindVertexArray(0);
+    g.BindBuffer(GL_ARRAY_BUFFER, 0);
+  }
+
+  void bindLayeredTextures(const gl::Program& program) const {
+    const gl::Api& g = gl::api();
+    program.set("uHash", 0);
+    program.set("uLists", 1);
+    program.set("uLeaves", 2);
+    program.set("uLowRes", 3);
+    program.set("uListsWidth", kListsWidth);
+    program.set("uImagesPerSide", mParams.bins.tilts * mParams.bins.rotations);
+    program.set("uLodFactor", mParams.lodFactor);
+    const std::pair<GLenum, GLuint> units[] = {{GL_TEXTURE_2D, mHashTexture.id()},
+                                               {GL_TEXTURE_2D, mListsTexture.id()},
+                                               {GL_TEXTURE_2D_ARRAY, mLeavesTexture.id()},
+                                               {GL_TEXTURE_2D, mLowResTexture.id()}};
+    for (GLenum unit = 0; unit < 4; ++unit) {
+      g.ActiveTexture(GL_TEXTURE0 + unit);
+      g.BindTexture(units[unit].first, units[unit].second);
+    }
+  }
+
+  MultilayerParams mParams;
+  Aabb mTreeBounds;
+  nlohmann::json mReport;
+  std::vector<LevelRange> mLevelRanges;
+  std::vector<Vertex> mVertices;
+  std::vector<uint32_t> mIndices;
+  glm::ivec2 mHashSize{1, 1};
+  std::vector<uint32_t> mHash;
+  int mListsHeight = 1;
+  std::vector<float> mLists;
+  std::vector<ImageRgba8> mLeafImages;
+  ImageRgba8 mLowRes;
+  gl::Buffer mVbo, mIbo;
+  gl::VertexArray mVao;
+  gl::Texture mHashTexture, mListsTexture, mLeavesTexture, mLowResTexture;
+  gl::Program mProgram, mFarProgram;
+  LodInstances mLod;
+  WoodRenderer mWood;
+};
+
+}  // namespace
+
+void registerMultilayerIndirect(MethodRegistry& registry) {
+  registry.add(
+      {"multilayer_indirect",
+       "multi-layer indirect texturing (García et al. 2007): lists of leaf fragments per hash cell",
+       [](const nlohmann::json& params, const std::string& path) -> std::unique_ptr<Method> {
+         return std::make_unique<MultilayerIndirect>(
+             readParams<MultilayerParams>(params, path, "multilayer_indirect"));
+       }});
+}
+
+}  // namespace canopy

@@ -1,0 +1,72 @@
+#version 430 core
+// Multi-layer indirect texturing, single pass (García et al. 2007 §5, Fig. 7): the hash cell
+// names a list of leaf fragments; walk it from the end facing the viewer until an opaque leaf
+// texel; evaluate at most a number of entries that falls with the projected size of a hash texel
+// (§5.1) and take the missing leaves from one fetch of the low-resolution texture.
+in vec3 vNormal;
+in vec2 vUv;
+in vec2 vLowResUv;
+flat in ivec4 vHash;
+flat in vec2 vHalfExtents;
+
+uniform usampler2D uHash;        // R32UI: (list start << 8) | list length, 0 when empty
+uniform sampler2D uLists;        // RGBA16F: leaf position (xy, plane units), image side, image
+uniform sampler2DArray uLeaves;  // oriented leaf images, sRGB
+uniform sampler2D uLowRes;       // the layered representation, captured at low resolution
+uniform int uListsWidth;
+uniform int uImagesPerSide;      // tilts × rotations: offset between front and back images
+uniform float uLodFactor;        // entries = factor × projected hash-texel diagonal (px); 0: all
+uniform int uLit;
+uniform vec3 uLightDirection;
+uniform float uAmbient;
+
+out vec4 outColor;
+
+vec3 shade(vec3 albedo) {
+  if (uLit == 0) return albedo;
+  vec3 normal = normalize(gl_FrontFacing ? vNormal : -vNormal);
+  return albedo * (uAmbient + (1.0 - uAmbient) * max(dot(normal, uLightDirection), 0.0));
+}
+
+void main() {
+  vec2 grid = vUv * vec2(vHash.zw);
+  ivec2 cell = clamp(ivec2(floor(grid)), ivec2(0), vHash.zw - 1);
+  uint cellWord = texelFetch(uHash, vHash.xy + cell, 0).r;
+  if (cellWord == 0u) discard;
+  int start = int(cellWord >> 8u);
+  int listLength = int(cellWord & 255u);
+  vec2 plane = (vUv * 2.0 - 1.0) * vHalfExtents;
+  vec2 planeDx = dFdx(plane), planeDy = dFdy(plane);
+  int budget = listLength;
+  if (uLodFactor > 0.0) {
+    float pixelsPerCell = 1.0 / max(max(length(dFdx(grid)), length(dFdy(grid))), 1e-6);
+    budget = min(listLength, int(ceil(uLodFactor * 1.41421356 * pixelsPerCell)));
+  }
+  bool fromFront = gl_FrontFacing;  // billboards are counter-clockwise seen from their front
+  for (int i = 0; i < budget; ++i) {
+    int k = start + (fromFront ? i : listLength - 1 - i);
+    vec4 entry = texelFetch(uLists, ivec2(k % uListsWidth, k / uListsWidth), 0);
+    vec2 local = (plane - entry.xy) / entry.z + 0.5;
+    if (any(lessThan(local, vec2(0.0))) || any(greaterThanEqual(local, vec2(1.0)))) continue;
+    float image = entry.w;
+    if (!fromFront) {  // seen from behind: the other side of the same orientation
+      int perSide = uImagesPerSide;
+      int index = int(image + 0.5);
+      bool back = (index / perSide) % 2 == 1;
+      image = float(back ? index - perSide : index + perSide);
+    }
+    vec4 texel = textureGrad(uLeaves, vec3(local, image), planeDx / entry.z, planeDy / entry.z);
+    if (texel.a >= 0.5) {
+      outColor = vec4(shade(texel.rgb), 1.0);
+      return;
+    }
+  }
+  if (budget < listLength) {
+    vec4 texel = texture(uLowRes, vLowResUv);
+    if (texel.a >= 0.5) {
+      outColor = vec4(shade(texel.rgb), 1.0);
+      return;
+    }
+  }
+  discard;
+}

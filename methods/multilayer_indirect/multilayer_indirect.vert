@@ -1,0 +1,25 @@
+#version 430 core
+layout(location = 0) in vec3 inPosition;
+layout(location = 1) in vec3 inNormal;
+layout(location = 2) in vec2 inLowResUv;     // in the low-resolution atlas
+layout(location = 3) in vec2 inUv;           // over the billboard, [0, 1]²
+layout(location = 4) in mat4 inModel;        // per instance, locations 4..7
+layout(location = 8) in ivec4 inHash;        // first cell in the hash atlas (xy), cells (zw)
+layout(location = 9) in vec2 inHalfExtents;  // of the billboard rectangle
+
+uniform mat4 uViewProjection;
+
+out vec3 vNormal;
+out vec2 vUv;
+out vec2 vLowResUv;
+flat out ivec4 vHash;
+flat out vec2 vHalfExtents;
+
+void main() {
+  vNormal = mat3(inModel) * inNormal;
+  vUv = inUv;
+  vLowResUv = inLowResUv;
+  vHash = inHash;
+  vHalfExtents = inHalfExtents;
+  gl_Position = uViewProjection * (inModel * vec4(inPosition, 1.0));
+}

@@ -1,0 +1,211 @@
+#include "methods/multilayer_indirect/layered_billboard.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include <glm/geometric.hpp>
+
+#include "bench/harness.h"
+#include "common/error.h"
+#include "methods/common/leaf_capture.h"
+#include "methods/method.h"
+#include "test_support.h"
+
+namespace canopy {
+namespace {
+
+struct LayeredFixture {
+  Tree tree = test::smallTree(1500, 9);
+  BillboardCloud cloud;
+  LayeringParams params;
+  LayeredFixture(SpriteRule rule = SpriteRule::kPaper) {
+    ClusteringParams clustering;
+    clustering.clusters = 30;
+    cloud = buildBillboardCloud(tree, clustering, 3);
+    params.sprite = rule;
+    params.maxLayers = 255;
+  }
+};
+
+TEST(LayeredBillboard, ListsAreFrontToBackAndHoldExactlyTheOverlappingSprites) {
+  for (SpriteRule rule : {SpriteRule::kPaper, SpriteRule::kBounds}) {
+    LayeredFixture f(rule);
+    for (const Billboard& billboard : f.cloud.billboards) {
+      const LayeredBillboard layered = buildLayeredBillboard(f.tree, billboard, f.params);
+      EXPECT_EQ(layered.droppedEntries, 0u);
+      for (int y = 0; y < layered.cells.y; ++y) {
+        for (int x = 0; x < layered.cells.x; ++x) {
+          const size_t cell = size_t(y) * layered.cells.x + x;
+          // Independently: the leaves whose sprite square overlaps this cell with positive area.
+          const glm::vec2 lo = -billboard.halfExtents + glm::vec2(x, y) * layered.cellSize;
+          const glm::vec2 hi = lo + layered.cellSize;
+          std::set<uint32_t> expected, listed;
+          for (uint32_t leaf : billboard.leaves) {
+            const LayerEntry sprite = leafSprite(f.tree.leaves[leaf], billboard, rule);
+            const glm::vec2 a = sprite.position - 0.5f * sprite.size,
+                            b = sprite.position + 0.5f * sprite.size;
+            const bool inside = a.x < hi.x && b.x > lo.x && a.y < hi.y && b.y > lo.y;
+            // Sprites touching the border cells from outside the billboard are clamped into them.
+            if (inside) expected.insert(leaf);
+          }
+          for (uint32_t k = 0; k < layered.listLength[cell]; ++k) {
+            const LayerEntry& entry = layered.entries[layered.listStart[cell] + k];
+            listed.insert(entry.leaf);
+            if (k > 0)
+              EXPECT_GE(layered.entries[layered.listStart[cell] + k - 1].depth, entry.depth)
+                  << "front to back";
+          }
+          EXPECT_EQ(listed, expected) << "cell " << x << "," << y;
+        }
+      }
+    }
+  }
+}
+
+TEST(LayeredBillboard, WalkFromEitherSideReturnsTheLeafNearestThatSide) {
+  // Two leaves stacked along the billboard normal, same position and orientation.
+  Tree tree = test::smallTree(50);
+  Leaf front = tree.leaves[0];
+  front.center = {0, 0, 0.1f};
+  front.normal = {0, 0, 1};
+  front.axisU = {1, 0, 0};
+  front.axisV = {0, 1, 0};
+  front.halfExtents = {0.05f, 0.1f};
+  Leaf back = front;
+  back.center = {0, 0, -0.1f};
+  tree.leaves = {front, back};
+  Billboard billboard;
+  billboard.normal = {0, 0, 1};
+  billboard.axisU = {1, 0, 0};
+  billboard.axisV = {0, 1, 0};
+  billboard.halfExtents = {0.2f, 0.2f};
+  billboard.leaves = {1, 0};
+  LayeringParams params;
+  params.hashResolution = 4;
+  const LayeredBillboard layered = buildLayeredBillboard(tree, billboard, params);
+  const LeafImageSampler sampler(tree);
+  const auto images = buildOrientedLeafImages(tree, sampler, params.bins, 32);
+  const auto fromFront = walkLayers(layered, billboard, images, params.bins, {0.0f, 0.0f}, true);
+  const auto fromBack = walkLayers(layered, billboard, images, params.bins, {0.0f, 0.0f}, false);
+  ASSERT_TRUE(fromFront && fromBack);
+  EXPECT_EQ(layered.entries[fromFront->entry].leaf, 0u);
+  EXPECT_EQ(layered.entries[fromBack->entry].leaf, 1u);
+  // Seen from the back, the leaf shows its underside image.
+  EXPECT_NE(fromFront->color, fromBack->color);
+  // Outside both leaves: nothing.
+  EXPECT_FALSE(walkLayers(layered, billboard, images, params.bins, {0.18f, 0.18f}, true));
+}
+
+// Renders `method` and the reference for a tree, camera along the billboard normal.
+struct TwoRenders {
+  ImageRgba8 reference, method;
+};
+TwoRenders renderBoth(const Tree& tree, const nlohmann::json& params, glm::vec3 normal,
+                      glm::vec3 up, float fov = 3.0f) {
+  auto context = test::makeTestContext();
+  gl::Ledger ledger;
+  gl::Device device(ledger);
+  RenderSettings settings;
+  settings.width = settings.height = 128;
+  settings.fovYDegrees = fov;
+  Harness harness(device, settings);
+  const float radius = tree.boundingSphereRadius();
+  Camera camera;
+  camera.target = tree.bounds.center();
+  camera.position = camera.target + normal * (radius * 40.0f);
+  camera.up = up;
+  camera.fovYDegrees = fov;
+  camera.nearPlane = radius * 30.0f;
+  camera.farPlane = radius * 50.0f;
+  TwoRenders out;
+  for (const std::string name : {"polygonal", "multilayer_indirect"}) {
+    auto m = builtinMethods().find(name).create(
+        name == "polygonal" ? nlohmann::json{{"wood", false}} : params, "test");
+    BakeContext ctx;
+    m->bake(tree, ctx);
+    gl::Device::OwnerScope scope(device, name);
+    m->upload(device);
+    (name == "polygonal" ? out.reference : out.method) = harness.render(*m, camera);
+  }
+  return out;
+}
+
+glm::vec2 coverageCentroid(const ImageRgba8& image, long* count) {
+  glm::dvec2 sum(0.0);
+  long n = 0;
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 0; x < image.width; ++x) {
+      if (image.at(x, y)[3] >= 128) sum += glm::dvec2(x, y), ++n;
+    }
+  }
+  *count = n;
+  return n ? glm::vec2(sum / double(n)) : glm::vec2(-1);
+}
+
+TEST(MultilayerIndirect, ABillboardWithOneLeafDrawsItWhereThePolygonalLeafIs) {
+  Tree tree = test::smallTree(50);
+  Leaf leaf = tree.leaves[0];
+  leaf.center = {0.3f, 1.0f, -0.2f};
+  leaf.normal = {0, 0, 1};
+  leaf.axisV = glm::normalize(glm::vec3(1, 1, 0));  // rotated 45° in its plane
+  leaf.axisU = glm::normalize(glm::cross(leaf.axisV, leaf.normal));
+  leaf.normal = glm::cross(leaf.axisU, leaf.axisV);
+  leaf.branch = -1;
+  tree.leaves = {leaf};
+  tree.branches.clear();
+  tree.wood = {};
+  tree.woodMaterials.clear();
+  finalizeTree(tree, "one leaf");
+  const auto renders = renderBoth(tree,
+                                  {{"clusters", 1},
+                                   {"lod", false},
+                                   {"wood", false},
+                                   {"sprite", "bounds"},
+                                   {"rotations", 8},
+                                   {"hash_resolution", 8}},
+                                  leaf.normal, {0, 1, 0});
+  long referenceCount = 0, methodCount = 0;
+  const glm::vec2 a = coverageCentroid(renders.reference, &referenceCount);
+  const glm::vec2 b = coverageCentroid(renders.method, &methodCount);
+  ASSERT_GT(referenceCount, 200);
+  // Same place within a pixel, same size within 15 % (quantized tilt and leaf image resampling).
+  EXPECT_LT(glm::length(a - b), 1.0f) << a.x << "," << a.y << " vs " << b.x << "," << b.y;
+  EXPECT_NEAR(double(methodCount) / double(referenceCount), 1.0, 0.15);
+}
+
+TEST(MultilayerIndirect, ShaderLodWithAllEntriesEqualsFullEvaluation) {
+  const Tree tree = test::smallTree(800, 4);
+  const nlohmann::json base = {{"clusters", 20}, {"lod", false}, {"wood", false}};
+  nlohmann::json all = base, generous = base;
+  all["lod_factor"] = 0.0;          // evaluate every entry
+  generous["lod_factor"] = 1000.0;  // a budget no list reaches
+  const auto full = renderBoth(tree, all, {0, 0, 1}, {0, 1, 0}, 20.0f);
+  const auto lod = renderBoth(tree, generous, {0, 0, 1}, {0, 1, 0}, 20.0f);
+  EXPECT_EQ(full.method, lod.method);
+  // A small factor evaluates fewer entries and so changes the image (the low-resolution fallback).
+  nlohmann::json stingy = base;
+  stingy["lod_factor"] = 0.01;
+  EXPECT_NE(renderBoth(tree, stingy, {0, 0, 1}, {0, 1, 0}, 20.0f).method, full.method);
+}
+
+TEST(MultilayerIndirect, BadParametersNameTheParameter) {
+  const auto& create = builtinMethods().find("multilayer_indirect").create;
+  for (const auto& [key, value] :
+       std::vector<std::pair<std::string, nlohmann::json>>{{"hash_resolution", 0},
+                                                           {"max_layers", 256},
+                                                           {"sprite", "huge"},
+                                                           {"lod_factor", -1.0},
+                                                           {"rotations", 0}}) {
+    try {
+      create({{key, value}}, "test");
+      FAIL() << key;
+    } catch (const InputError& error) {
+      EXPECT_NE(std::string(error.what()).find(key), std::string::npos) << error.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace canopy
