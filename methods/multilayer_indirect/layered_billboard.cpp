@@ -7,6 +7,7 @@
 #include <glm/geometric.hpp>
 
 #include "common/error.h"
+#include "methods/common/ambient_occlusion.h"
 
 namespace canopy {
 
@@ -43,7 +44,8 @@ LayerEntry leafSprite(const Leaf& leaf, const Billboard& billboard, SpriteRule r
 }
 
 LayeredBillboard buildLayeredBillboard(const Tree& tree, const Billboard& billboard,
-                                       const LayeringParams& params) {
+                                       const LayeringParams& params,
+                                       const std::vector<glm::vec4>* cornerOcclusion) {
   LayeredBillboard layered;
   const float longer = 2.0f * std::max(billboard.halfExtents.x, billboard.halfExtents.y);
   const float target = longer / float(params.hashResolution);
@@ -57,6 +59,17 @@ LayeredBillboard buildLayeredBillboard(const Tree& tree, const Billboard& billbo
     LayerEntry entry = leafSprite(tree.leaves[index], billboard, params.sprite);
     entry.leaf = index;
     entry.image = orientedImageIndex(tree.leaves[index], billboard, params.bins);
+    if (cornerOcclusion) {
+      const Leaf& leaf = tree.leaves[index];
+      std::vector<glm::vec2> points;
+      std::vector<float> values;
+      for (int c = 0; c < 4; ++c) {
+        points.push_back(billboard.toPlane(leaf.corner(c)));
+        values.push_back((*cornerOcclusion)[index][c]);
+      }
+      entry.ambient =
+          glm::clamp(fitCornerValues(points, values, entry.position, entry.size), 0.0f, 1.0f);
+    }
     // Cells the sprite square overlaps with positive area.
     const glm::vec2 lo =
         (entry.position - 0.5f * entry.size + billboard.halfExtents) / layered.cellSize;

@@ -58,8 +58,11 @@ LayerEntry leafSprite(const Leaf& leaf, const Billboard& billboard, SpriteRule r
 // Builds the hash grid and the lists: every leaf of the billboard is a point sprite listed in
 // each cell its square overlaps (with positive area), lists sorted front to back along the
 // billboard normal. Exact CPU construction of what the paper obtains by depth peeling.
+// `cornerOcclusion` (per leaf, at its four corners; may be null) fills each entry's `ambient` by
+// the least-squares extrapolation of §5.2 to the sprite's corners.
 LayeredBillboard buildLayeredBillboard(const Tree& tree, const Billboard& billboard,
-                                       const LayeringParams& params);
+                                       const LayeringParams& params,
+                                       const std::vector<glm::vec4>* cornerOcclusion = nullptr);
 
 // Walks the list of the cell under `point` (billboard plane coordinates) from the end facing the
 // viewer, as the fragment shader does, over at most `budget` entries (< 0: all); returns the

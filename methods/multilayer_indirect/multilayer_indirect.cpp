@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include "common/config.h"
+#include "methods/common/ambient_occlusion.h"
 #include "methods/common/cloud_params.h"
 #include "methods/common/leaf_capture.h"
 #include "methods/common/leaf_orientations.h"
@@ -23,6 +24,8 @@ struct MultilayerParams {
   int leafImageSize = 64;        // texels per side of each oriented leaf image
   float lodFactor = 1.0f;        // shader LoD: entries = factor × hash-texel diagonal (px); 0: all
   int lowResTexelsPerCell = 1;   // low-resolution texture texels per hash cell side
+  bool ambientOcclusion = true;  // §5.2: Embree AO of the polygonal tree at sprite corners (lit)
+  int aoRays = 32;               // rays per leaf corner for the ambient occlusion
   bool drawWood = true;          // draw the trunk and branches as geometry
 
   template <class Visitor>
@@ -36,6 +39,8 @@ struct MultilayerParams {
     v("leaf_image_size", leafImageSize, 4, 512);
     v("lod_factor", lodFactor, 0.0f, 1000.0f);
     v("lowres_texels_per_cell", lowResTexelsPerCell, 1, 16);
+    v("ambient_occlusion", ambientOcclusion);
+    v("ao_rays", aoRays, 1, 4096);
     v("wood", drawWood);
   }
 };
@@ -83,9 +88,13 @@ class MultilayerIndirect final : public Method {
                               static_cast<uint32_t>(cloud.billboards.size() * 6)});
       for (const Billboard& billboard : cloud.billboards) billboards.push_back(&billboard);
     }
+    std::vector<glm::vec4> occlusion;
+    if (mParams.ambientOcclusion)
+      occlusion = computeLeafCornerOcclusion(tree, mParams.aoRays, ctx.seed);
     std::vector<LayeredBillboard> layered(billboards.size());
     tbb::parallel_for(size_t(0), billboards.size(), [&](size_t i) {
-      layered[i] = buildLayeredBillboard(tree, *billboards[i], layering);
+      layered[i] = buildLayeredBillboard(tree, *billboards[i], layering,
+                                         mParams.ambientOcclusion ? &occlusion : nullptr);
     });
     const LeafImageSampler sampler(tree);
     mLeafImages = buildOrientedLeafImages(tree, sampler, mParams.bins, mParams.leafImageSize);
@@ -97,12 +106,16 @@ class MultilayerIndirect final : public Method {
     mHashSize = {hashLayout.width, hashLayout.height};
     mHash.assign(size_t(hashLayout.width) * hashLayout.height, 0u);
     mLists.clear();
+    mAmbient.clear();
     size_t maxList = 0, dropped = 0, finestEntries = 0;
     for (size_t i = 0; i < layered.size(); ++i) {
       const LayeredBillboard& l = layered[i];
       const auto base = static_cast<uint32_t>(mLists.size() / 4);
-      for (const LayerEntry& e : l.entries)
+      for (const LayerEntry& e : l.entries) {
         mLists.insert(mLists.end(), {e.position.x, e.position.y, e.size, float(e.image)});
+        for (int c = 0; c < 4; ++c)
+          mAmbient.push_back(static_cast<uint8_t>(std::lround(e.ambient[c] * 255.0f)));
+      }
       for (int y = 0; y < l.cells.y; ++y) {
         for (int x = 0; x < l.cells.x; ++x) {
           const size_t cell = size_t(y) * l.cells.x + x;
@@ -119,6 +132,7 @@ class MultilayerIndirect final : public Method {
       throwInputError("multilayer_indirect: more than 2^24 list entries");
     mListsHeight = static_cast<int>((mLists.size() / 4 + kListsWidth - 1) / kListsWidth);
     mLists.resize(size_t(kListsWidth) * std::max(mListsHeight, 1) * 4, 0.0f);
+    mAmbient.resize(mLists.size(), 255);
     mListsHeight = std::max(mListsHeight, 1);
 
     // The low-resolution texture, baked from the layered representation (§5.1).
@@ -166,6 +180,11 @@ class MultilayerIndirect final : public Method {
                                           false, MemoryCategory::kTexture, "lists atlas"});
     device.uploadTexture(mListsTexture, GL_RGBA, GL_FLOAT, mLists.data());
     gl::setTextureSampling(mListsTexture, false, false);
+    mAmbientTexture = device.createTexture({GL_TEXTURE_2D, kListsWidth, mListsHeight, 1, GL_RGBA8,
+                                            false, MemoryCategory::kTexture,
+                                            "ambient occlusion (indexed like the lists)"});
+    device.uploadTexture(mAmbientTexture, GL_RGBA, GL_UNSIGNED_BYTE, mAmbient.data());
+    gl::setTextureSampling(mAmbientTexture, false, false);
     mLeavesTexture = uploadLeafImageArray(device, mLeafImages, "oriented leaf images");
     mLowResTexture = uploadAlphaTestedTexture(device, mLowRes, true, "low-resolution atlas");
     mProgram = device.createProgram(
@@ -228,6 +247,7 @@ class MultilayerIndirect final : public Method {
     asset.writeBlob("indices.bin", mIndices);
     asset.writeBlob("hash.bin", mHash);
     asset.writeBlob("lists.bin", mLists);
+    asset.writeBlob("ambient.bin", mAmbient);
     for (size_t i = 0; i < mLeafImages.size(); ++i)
       asset.writeImage(fmt::format("leaf_image_{}.png", i), mLeafImages[i]);
     asset.writeImage("lowres.png", mLowRes);
@@ -253,6 +273,7 @@ class MultilayerIndirect final : public Method {
     mIndices = asset.readBlobAs<uint32_t>("indices.bin");
     mHash = asset.readBlobAs<uint32_t>("hash.bin");
     mLists = asset.readBlobAs<float>("lists.bin");
+    mAmbient = asset.readBlobAs<uint8_t>("ambient.bin");
     mLeafImages.clear();
     for (size_t i = 0; i < header.at("leaf_images").get<size_t>(); ++i)
       mLeafImages.push_back(asset.readImage(fmt::format("leaf_image_{}.png", i)));
@@ -343,14 +364,16 @@ class MultilayerIndirect final : public Method {
     program.set("uLists", 1);
     program.set("uLeaves", 2);
     program.set("uLowRes", 3);
+    program.set("uAmbientOcclusion", 4);
     program.set("uListsWidth", kListsWidth);
     program.set("uImagesPerSide", mParams.bins.tilts * mParams.bins.rotations);
     program.set("uLodFactor", mParams.lodFactor);
     const std::pair<GLenum, GLuint> units[] = {{GL_TEXTURE_2D, mHashTexture.id()},
                                                {GL_TEXTURE_2D, mListsTexture.id()},
                                                {GL_TEXTURE_2D_ARRAY, mLeavesTexture.id()},
-                                               {GL_TEXTURE_2D, mLowResTexture.id()}};
-    for (GLenum unit = 0; unit < 4; ++unit) {
+                                               {GL_TEXTURE_2D, mLowResTexture.id()},
+                                               {GL_TEXTURE_2D, mAmbientTexture.id()}};
+    for (GLenum unit = 0; unit < 5; ++unit) {
       g.ActiveTexture(GL_TEXTURE0 + unit);
       g.BindTexture(units[unit].first, units[unit].second);
     }
@@ -366,11 +389,12 @@ class MultilayerIndirect final : public Method {
   std::vector<uint32_t> mHash;
   int mListsHeight = 1;
   std::vector<float> mLists;
+  std::vector<uint8_t> mAmbient;  // RGBA8 per list entry: ambient term at the sprite's corners
   std::vector<ImageRgba8> mLeafImages;
   ImageRgba8 mLowRes;
   gl::Buffer mVbo, mIbo;
   gl::VertexArray mVao;
-  gl::Texture mHashTexture, mListsTexture, mLeavesTexture, mLowResTexture;
+  gl::Texture mHashTexture, mListsTexture, mLeavesTexture, mLowResTexture, mAmbientTexture;
   gl::Program mProgram, mFarProgram;
   LodInstances mLod;
   WoodRenderer mWood;

@@ -13,6 +13,7 @@ uniform usampler2D uHash;        // R32UI: (list start << 8) | list length, 0 wh
 uniform sampler2D uLists;        // RGBA16F: leaf position (xy, plane units), image side, image
 uniform sampler2DArray uLeaves;  // oriented leaf images, sRGB
 uniform sampler2D uLowRes;       // the layered representation, captured at low resolution
+uniform sampler2D uAmbientOcclusion;  // RGBA8 like the lists: ambient term at the sprite's corners
 uniform int uListsWidth;
 uniform int uImagesPerSide;      // tilts × rotations: offset between front and back images
 uniform float uLodFactor;        // entries = factor × projected hash-texel diagonal (px); 0: all
@@ -22,10 +23,11 @@ uniform float uAmbient;
 
 out vec4 outColor;
 
-vec3 shade(vec3 albedo) {
+// Albedo, or two-sided Lambert whose ambient term is scaled by the ambient occlusion (§5.2).
+vec3 shade(vec3 albedo, float occlusion) {
   if (uLit == 0) return albedo;
   vec3 normal = normalize(gl_FrontFacing ? vNormal : -vNormal);
-  return albedo * (uAmbient + (1.0 - uAmbient) * max(dot(normal, uLightDirection), 0.0));
+  return albedo * (uAmbient * occlusion + (1.0 - uAmbient) * max(dot(normal, uLightDirection), 0.0));
 }
 
 void main() {
@@ -57,14 +59,16 @@ void main() {
     }
     vec4 texel = textureGrad(uLeaves, vec3(local, image), planeDx / entry.z, planeDy / entry.z);
     if (texel.a >= 0.5) {
-      outColor = vec4(shade(texel.rgb), 1.0);
+      vec4 corners = texelFetch(uAmbientOcclusion, ivec2(k % uListsWidth, k / uListsWidth), 0);
+      float occlusion = mix(mix(corners.x, corners.y, local.x), mix(corners.w, corners.z, local.x), local.y);
+      outColor = vec4(shade(texel.rgb, occlusion), 1.0);
       return;
     }
   }
   if (budget < listLength) {
     vec4 texel = texture(uLowRes, vLowResUv);
     if (texel.a >= 0.5) {
-      outColor = vec4(shade(texel.rgb), 1.0);
+      outColor = vec4(shade(texel.rgb, 1.0), 1.0);
       return;
     }
   }
