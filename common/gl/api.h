@@ -63,6 +63,8 @@ namespace canopy::gl {
   X(PFNGLTEXSUBIMAGE2DPROC, TexSubImage2D)                                     \
   X(PFNGLTEXSUBIMAGE3DPROC, TexSubImage3D)                                     \
   X(PFNGLCOMPRESSEDTEXIMAGE2DPROC, CompressedTexImage2D)                       \
+  X(PFNGLCOMPRESSEDTEXSUBIMAGE2DPROC, CompressedTexSubImage2D)                 \
+  X(PFNGLCOMPRESSEDTEXSUBIMAGE3DPROC, CompressedTexSubImage3D)                 \
   X(PFNGLTEXPARAMETERIPROC, TexParameteri)                                     \
   X(PFNGLTEXPARAMETERFPROC, TexParameterf)                                     \
   X(PFNGLGENERATEMIPMAPPROC, GenerateMipmap)                                   \

@@ -134,6 +134,26 @@ void Device::uploadTextureLevel(Texture& texture, int level, GLenum format, GLen
   checkError("uploadTextureLevel");
 }
 
+void Device::uploadCompressedLevel(Texture& texture, int level, int layer,
+                                   const std::vector<uint8_t>& blocks) {
+  const Api& g = api();
+  const TextureDesc& d = texture.desc;
+  const int w = std::max(1, d.width >> level), h = std::max(1, d.height >> level);
+  if (blocks.size() != textureLevelBytes(d.internalFormat, w, h, 1)) {
+    throw std::logic_error("uploadCompressedLevel: block data does not match the level size");
+  }
+  g.BindTexture(d.target, texture.id());
+  if (d.target == GL_TEXTURE_2D_ARRAY) {
+    g.CompressedTexSubImage3D(d.target, level, 0, 0, layer, w, h, 1, d.internalFormat,
+                              static_cast<GLsizei>(blocks.size()), blocks.data());
+  } else {
+    g.CompressedTexSubImage2D(d.target, level, 0, 0, w, h, d.internalFormat,
+                              static_cast<GLsizei>(blocks.size()), blocks.data());
+  }
+  g.BindTexture(d.target, 0);
+  checkError("uploadCompressedLevel");
+}
+
 void Device::generateMipmaps(Texture& texture) {
   const Api& g = api();
   g.BindTexture(texture.desc.target, texture.id());

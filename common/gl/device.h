@@ -171,6 +171,9 @@ class Device {
   void uploadTexture(Texture& texture, GLenum format, GLenum type, const void* pixels);
   void uploadTextureLayer(Texture& texture, int layer, GLenum format, GLenum type,
                           const void* pixels, int level = 0);
+  // Uploads one level (of one layer, for arrays) of a block-compressed texture.
+  void uploadCompressedLevel(Texture& texture, int level, int layer,
+                             const std::vector<uint8_t>& blocks);
   void generateMipmaps(Texture& texture);
   // Uploads one mip level of a 2D texture (levels made on the CPU, e.g. coverage-preserving).
   void uploadTextureLevel(Texture& texture, int level, GLenum format, GLenum type,

@@ -17,11 +17,12 @@ namespace {
 
 struct BillboardCloudParams {
   CloudParams cloud;
-  float density = 32.0f;          // texels per unit length of billboard (the memory knob)
-  int supersample = 4;            // capture samples per texel side
-  int maxBillboardTexels = 1024;  // cap on one billboard's texture side
-  bool mipmaps = true;            // mipmapped atlas (trilinear, coverage-preserving levels)
-  bool drawWood = true;           // draw the trunk and branches as geometry
+  float density = 32.0f;             // texels per unit length of billboard (the memory knob)
+  int supersample = 4;               // capture samples per texel side
+  int maxBillboardTexels = 1024;     // cap on one billboard's texture side
+  bool mipmaps = true;               // mipmapped atlas (trilinear, coverage-preserving levels)
+  bool drawWood = true;              // draw the trunk and branches as geometry
+  std::string compression = "none";  // the atlas: "none", "dxt1" (BC1) or "dxt5" (BC3)
 
   template <class Visitor>
   void visit(Visitor& v) {
@@ -31,6 +32,7 @@ struct BillboardCloudParams {
     v("max_billboard_texels", maxBillboardTexels, 1, 8192);
     v("mipmaps", mipmaps);
     v("wood", drawWood);
+    v("compression", compression, {"none", "dxt1", "dxt5"});
   }
 };
 
@@ -98,7 +100,8 @@ class BillboardCloudMethod final : public Method {
                                "billboard vertices");
     mIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mIndices,
                                "billboard indices");
-    mAtlasTexture = uploadAlphaTestedTexture(device, mAtlas, mParams.mipmaps, "billboard atlas");
+    mAtlasTexture = uploadAlphaTestedTexture(device, mAtlas, mParams.mipmaps, "billboard atlas",
+                                             parseCompression(mParams.compression));
     mVao = makeMeshVertexArray(mVbo, mIbo);
     mProgram =
         device.createProgram({gl::embeddedShader("methods/common/mesh.vert"),

@@ -6,6 +6,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "common/error.h"
 #include "methods/common/mipmaps.h"
 
 namespace canopy {
@@ -94,16 +95,24 @@ std::vector<ImageRgba8> buildOrientedLeafImages(const Tree& tree, const LeafImag
 }
 
 gl::Texture uploadLeafImageArray(gl::Device& device, const std::vector<ImageRgba8>& images,
-                                 const char* label) {
+                                 const char* label, Compression compression) {
+  if (compression != Compression::kNone && !driverHasS3tc()) {
+    throwInputError("parameter 'compression': this OpenGL driver has no S3TC; use \"none\"");
+  }
   const int size = images.empty() ? 1 : images[0].width;
-  gl::Texture texture =
-      device.createTexture({GL_TEXTURE_2D_ARRAY, size, size, static_cast<int>(images.size()),
-                            GL_SRGB8_ALPHA8, true, gl::MemoryCategory::kTexture, label});
+  gl::Texture texture = device.createTexture(
+      {GL_TEXTURE_2D_ARRAY, size, size, static_cast<int>(images.size()),
+       srgbInternalFormat(compression), true, gl::MemoryCategory::kTexture, label});
   for (size_t layer = 0; layer < images.size(); ++layer) {
     const std::vector<ImageRgba8> levels = buildCoveragePreservingMips(images[layer]);
     for (size_t level = 0; level < levels.size(); ++level) {
-      device.uploadTextureLayer(texture, static_cast<int>(layer), GL_RGBA, GL_UNSIGNED_BYTE,
-                                levels[level].pixels.data(), static_cast<int>(level));
+      if (compression == Compression::kNone) {
+        device.uploadTextureLayer(texture, static_cast<int>(layer), GL_RGBA, GL_UNSIGNED_BYTE,
+                                  levels[level].pixels.data(), static_cast<int>(level));
+      } else {
+        device.uploadCompressedLevel(texture, static_cast<int>(level), static_cast<int>(layer),
+                                     compressImage(levels[level], compression));
+      }
     }
   }
   gl::setTextureSampling(texture, true, false);

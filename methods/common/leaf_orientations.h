@@ -7,6 +7,7 @@
 #include "common/image.h"
 #include "common/tree.h"
 #include "methods/common/billboard_cloud.h"
+#include "methods/common/dxt.h"
 #include "methods/common/leaf_capture.h"
 
 namespace canopy {
@@ -33,6 +34,6 @@ std::vector<ImageRgba8> buildOrientedLeafImages(const Tree& tree, const LeafImag
 
 // Uploads images as one mipmapped sRGB 2D array (coverage-preserving levels).
 gl::Texture uploadLeafImageArray(gl::Device& device, const std::vector<ImageRgba8>& images,
-                                 const char* label);
+                                 const char* label, Compression compression = Compression::kNone);
 
 }  // namespace canopy

@@ -5,6 +5,8 @@
 
 #include <glm/vec4.hpp>
 
+#include "common/error.h"
+
 namespace canopy {
 namespace {
 
@@ -80,18 +82,23 @@ std::vector<ImageRgba8> buildCoveragePreservingMips(const ImageRgba8& base, floa
 namespace canopy {
 
 gl::Texture uploadAlphaTestedTexture(gl::Device& device, const ImageRgba8& image, bool mipmaps,
-                                     const char* label) {
-  gl::Texture texture =
-      device.createTexture({GL_TEXTURE_2D, image.width, image.height, 1, GL_SRGB8_ALPHA8, mipmaps,
-                            gl::MemoryCategory::kTexture, label});
-  if (mipmaps) {
-    const std::vector<ImageRgba8> levels = buildCoveragePreservingMips(image);
-    for (size_t level = 0; level < levels.size(); ++level) {
+                                     const char* label, Compression compression) {
+  if (compression != Compression::kNone && !driverHasS3tc()) {
+    throwInputError("parameter 'compression': this OpenGL driver has no S3TC; use \"none\"");
+  }
+  gl::Texture texture = device.createTexture({GL_TEXTURE_2D, image.width, image.height, 1,
+                                              srgbInternalFormat(compression), mipmaps,
+                                              gl::MemoryCategory::kTexture, label});
+  const std::vector<ImageRgba8> levels =
+      mipmaps ? buildCoveragePreservingMips(image) : std::vector<ImageRgba8>{image};
+  for (size_t level = 0; level < levels.size(); ++level) {
+    if (compression == Compression::kNone) {
       device.uploadTextureLevel(texture, static_cast<int>(level), GL_RGBA, GL_UNSIGNED_BYTE,
                                 levels[level].pixels.data());
+    } else {
+      device.uploadCompressedLevel(texture, static_cast<int>(level), 0,
+                                   compressImage(levels[level], compression));
     }
-  } else {
-    device.uploadTexture(texture, GL_RGBA, GL_UNSIGNED_BYTE, image.pixels.data());
   }
   gl::setTextureSampling(texture, true, false);
   return texture;

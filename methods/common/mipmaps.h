@@ -4,6 +4,7 @@
 
 #include "common/gl/device.h"
 #include "common/image.h"
+#include "methods/common/dxt.h"
 
 namespace canopy {
 
@@ -19,8 +20,10 @@ std::vector<ImageRgba8> buildCoveragePreservingMips(const ImageRgba8& base,
 
 namespace canopy {
 
-// A 2D sRGB texture with the chain above (or level 0 only when !mipmaps), linear filtering.
+// A 2D sRGB texture with the chain above (or level 0 only when !mipmaps), linear filtering,
+// every level block-compressed unless `compression` is kNone.
 gl::Texture uploadAlphaTestedTexture(gl::Device& device, const ImageRgba8& image, bool mipmaps,
-                                     const char* label);
+                                     const char* label,
+                                     Compression compression = Compression::kNone);
 
 }  // namespace canopy

@@ -26,7 +26,8 @@ struct MultilayerParams {
   int lowResTexelsPerCell = 1;   // low-resolution texture texels per hash cell side
   bool ambientOcclusion = true;  // §5.2: Embree AO of the polygonal tree at sprite corners (lit)
   int aoRays = 32;               // rays per leaf corner for the ambient occlusion
-  bool drawWood = true;          // draw the trunk and branches as geometry
+  std::string compression = "none";  // colour textures: "none", "dxt1" (BC1) or "dxt5" (BC3)
+  bool drawWood = true;              // draw the trunk and branches as geometry
 
   template <class Visitor>
   void visit(Visitor& v) {
@@ -41,6 +42,7 @@ struct MultilayerParams {
     v("lowres_texels_per_cell", lowResTexelsPerCell, 1, 16);
     v("ambient_occlusion", ambientOcclusion);
     v("ao_rays", aoRays, 1, 4096);
+    v("compression", compression, {"none", "dxt1", "dxt5"});
     v("wood", drawWood);
   }
 };
@@ -101,14 +103,18 @@ class MultilayerIndirect final : public Method {
 
     // Hash atlas and lists atlas (§6).
     std::vector<glm::ivec2> cellSizes;
-    for (const LayeredBillboard& l : layered) cellSizes.push_back(l.cells);
+    // The far cloud draws its low-resolution texture only: it needs no hash cells or lists.
+    const size_t layeredBillboards =
+        mLevelRanges.size() > kFarLevel ? mLevelRanges[kFarLevel].first / 6 : layered.size();
+    for (size_t i = 0; i < layered.size(); ++i)
+      cellSizes.push_back(i < layeredBillboards ? layered[i].cells : glm::ivec2(1));
     const AtlasLayout hashLayout = packAtlas(cellSizes, 0, 1);
     mHashSize = {hashLayout.width, hashLayout.height};
     mHash.assign(size_t(hashLayout.width) * hashLayout.height, 0u);
     mLists.clear();
     mAmbient.clear();
     size_t maxList = 0, dropped = 0, finestEntries = 0;
-    for (size_t i = 0; i < layered.size(); ++i) {
+    for (size_t i = 0; i < layeredBillboards; ++i) {
       const LayeredBillboard& l = layered[i];
       const auto base = static_cast<uint32_t>(mLists.size() / 4);
       for (const LayerEntry& e : l.entries) {
@@ -185,8 +191,10 @@ class MultilayerIndirect final : public Method {
                                             "ambient occlusion (indexed like the lists)"});
     device.uploadTexture(mAmbientTexture, GL_RGBA, GL_UNSIGNED_BYTE, mAmbient.data());
     gl::setTextureSampling(mAmbientTexture, false, false);
-    mLeavesTexture = uploadLeafImageArray(device, mLeafImages, "oriented leaf images");
-    mLowResTexture = uploadAlphaTestedTexture(device, mLowRes, true, "low-resolution atlas");
+    mLeavesTexture = uploadLeafImageArray(device, mLeafImages, "oriented leaf images",
+                                          parseCompression(mParams.compression));
+    mLowResTexture = uploadAlphaTestedTexture(device, mLowRes, true, "low-resolution atlas",
+                                              parseCompression(mParams.compression));
     mProgram = device.createProgram(
         {gl::embeddedShader("methods/multilayer_indirect/multilayer_indirect.vert"),
          gl::embeddedShader("methods/multilayer_indirect/multilayer_indirect.frag")});
