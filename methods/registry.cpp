@@ -1,5 +1,6 @@
 #include <algorithm>
 
+#include "methods/bbox_hierarchy/bbox_hierarchy.h"
 #include "methods/billboard_cloud/billboard_cloud.h"
 #include "methods/method.h"
 #include "methods/multilayer_indirect/multilayer_indirect.h"
@@ -38,6 +39,7 @@ const MethodRegistry& builtinMethods() {
     registerBillboardCloud(r);
     registerSingleLeafIndirect(r);
     registerMultilayerIndirect(r);
+    registerBboxHierarchy(r);
     return r;
   }();
   return registry;

@@ -1,0 +1,458 @@
+#include "methods/bbox_hierarchy/bbox_hierarchy.h"
+
+#include <tbb/parallel_for.h>
+
+#include <array>
+#include <cmath>
+#include <map>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_inverse.hpp>
+
+#include "common/config.h"
+#include "methods/bbox_hierarchy/box_hierarchy.h"
+#include "methods/common/leaf_capture.h"
+#include "methods/common/mesh.h"
+#include "methods/common/mipmaps.h"
+
+namespace canopy {
+namespace {
+
+struct BboxParams {
+  int textureSize = 64;  // texels per side of every box image, all levels (§3.2.3: 64 or 128)
+  float volumeRatio =
+      0.1f;  // §3.2.4: no images for a box below this fraction of its parent's volume
+  std::string arrangement = "cross";  // "cross" (Fig. 3) or "diagonal" (Fig. 6)
+  float transition = 0.25f;  // blend band beyond a box's LoD distance, as a fraction of it (0: pop)
+  std::string hierarchy = "auto";  // "auto", "branches" (the L-system's) or "spatial" (leaves only)
+  int spatialLeaves = 200;         // spatial hierarchy: at most this many leaves per finest box
+  int supersample = 4;             // capture samples per texel side
+  bool drawWood = true;            // draw the trunk and branches as geometry
+
+  template <class Visitor>
+  void visit(Visitor& v) {
+    v("texture_size", textureSize, 8, 1024);
+    v("volume_ratio", volumeRatio, 0.0f, 1.0f);
+    v("arrangement", arrangement, {"cross", "diagonal"});
+    v("transition", transition, 0.0f, 10.0f);
+    v("hierarchy", hierarchy, {"auto", "branches", "spatial"});
+    v("spatial_leaves", spatialLeaves, 1, 1000000);
+    v("supersample", supersample, 1, 8);
+    v("wood", drawWood);
+  }
+};
+
+// The six quads of a box (§4, Fig. 3): planes through the box centre, each facing one way and
+// showing the leaves seen from that side. "diagonal" (Fig. 6) turns the two vertical pairs onto
+// the box's vertical diagonal planes; the horizontal pair stays.
+std::array<Billboard, 6> boxQuads(const Aabb& box, bool diagonal) {
+  const glm::vec3 c = box.center(), h = box.extent() * 0.5f;
+  std::array<Billboard, 6> quads;
+  const auto make = [&](glm::vec3 normal, glm::vec3 axisU, glm::vec2 half) {
+    Billboard q;
+    q.center = c;
+    q.normal = normal;
+    q.axisU = axisU;
+    q.axisV = glm::cross(normal, axisU);
+    q.halfExtents = half;
+    return q;
+  };
+  if (!diagonal) {
+    quads[0] = make({1, 0, 0}, {0, 0, -1}, {h.z, h.y});
+    quads[1] = make({-1, 0, 0}, {0, 0, 1}, {h.z, h.y});
+    quads[2] = make({0, 0, 1}, {1, 0, 0}, {h.x, h.y});
+    quads[3] = make({0, 0, -1}, {-1, 0, 0}, {h.x, h.y});
+  } else {
+    const float diagonalHalf = std::sqrt(h.x * h.x + h.z * h.z);
+    const glm::vec3 d1 = glm::normalize(glm::vec3(h.x, 0, h.z)),
+                    d2 = glm::normalize(glm::vec3(h.x, 0, -h.z));
+    const glm::vec3 n1 = glm::cross(glm::vec3(0, 1, 0), d1),
+                    n2 = glm::cross(glm::vec3(0, 1, 0), d2);
+    quads[0] = make(n1, -d1, {diagonalHalf, h.y});
+    quads[1] = make(-n1, d1, {diagonalHalf, h.y});
+    quads[2] = make(n2, -d2, {diagonalHalf, h.y});
+    quads[3] = make(-n2, d2, {diagonalHalf, h.y});
+  }
+  quads[4] = make({0, 1, 0}, {1, 0, 0}, {h.x, h.z});
+  quads[5] = make({0, -1, 0}, {-1, 0, 0}, {h.x, h.z});
+  for (Billboard& q : quads) q.axisV = glm::cross(q.normal, q.axisU);
+  return quads;
+}
+
+class BboxHierarchy final : public Method {
+ public:
+  explicit BboxHierarchy(BboxParams params) : mParams(std::move(params)) {}
+
+  void bake(const Tree& tree, BakeContext&) override {
+    mWood.bake(tree);
+    const bool hasBranches = !tree.branches.empty();
+    if (mParams.hierarchy == "branches" && !hasBranches) {
+      throwInputError(
+          "bbox_hierarchy: parameter 'hierarchy' = \"branches\", but tree '{}' has no branch "
+          "hierarchy",
+          tree.name);
+    }
+    mHierarchy = (mParams.hierarchy == "spatial" || !hasBranches)
+                     ? spatialHierarchy(tree, mParams.spatialLeaves)
+                     : hierarchyFromBranches(tree);
+    pruneByVolumeRatio(mHierarchy, mParams.volumeRatio);
+    // Six images per textured box (§3.2.2): the leaves of its subtree, orthographically.
+    const LeafImageSampler sampler(tree);
+    std::vector<int32_t> textured;
+    for (size_t n = 0; n < mHierarchy.nodes.size(); ++n) {
+      if (mHierarchy.nodes[n].textured) textured.push_back(static_cast<int32_t>(n));
+    }
+    // Coarse to fine (§1, §6: progressive transmission): images ordered by level.
+    std::stable_sort(textured.begin(), textured.end(), [&](int32_t a, int32_t b) {
+      return mHierarchy.nodes[a].level < mHierarchy.nodes[b].level;
+    });
+    std::vector<ImageRgba8> images(textured.size() * 6);
+    std::vector<std::array<Billboard, 6>> quads(textured.size());
+    tbb::parallel_for(size_t(0), textured.size(), [&](size_t t) {
+      const BoxNode& node = mHierarchy.nodes[textured[t]];
+      std::vector<uint32_t> leaves(mHierarchy.leafOrder.begin() + node.leafBegin,
+                                   mHierarchy.leafOrder.begin() + node.subtreeLeafEnd);
+      quads[t] = boxQuads(node.box, mParams.arrangement == "diagonal");
+      for (int f = 0; f < 6; ++f) {
+        images[t * 6 + f] =
+            captureLeavesOrthographic(tree, sampler, leaves, quads[t][f], mParams.textureSize,
+                                      mParams.textureSize, mParams.supersample);
+      }
+    });
+    const ImageAtlas atlas = composeAtlas(images, 4, 8);
+    mAtlas = atlas.image;
+    // Geometry: box quads (24 vertices each box), then one quad per leaf in hierarchy order.
+    mVertices.clear();
+    mIndices.clear();
+    mBoxFirstIndex.assign(mHierarchy.nodes.size(), UINT32_MAX);
+    mWorldPerTexel.assign(mHierarchy.nodes.size(), 0.0f);
+    for (size_t t = 0; t < textured.size(); ++t) {
+      const int32_t n = textured[t];
+      mBoxFirstIndex[n] = static_cast<uint32_t>(mIndices.size());
+      for (int f = 0; f < 6; ++f) {
+        const Billboard& q = quads[t][f];
+        const auto base = static_cast<uint32_t>(mVertices.size());
+        for (int c = 0; c < 4; ++c)
+          mVertices.push_back({q.corner(c), q.normal, atlas.cornerUv(t * 6 + f, c)});
+        for (uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) mIndices.push_back(base + k);
+        // §4, Fig. 5: the image shows one texel per pixel at distance size / texels · focal.
+        mWorldPerTexel[n] =
+            std::max(mWorldPerTexel[n],
+                     2.0f * std::max(q.halfExtents.x, q.halfExtents.y) / mParams.textureSize);
+      }
+    }
+    mLeafFirstIndex = static_cast<uint32_t>(mIndices.size());
+    for (uint32_t leafIndex : mHierarchy.leafOrder) {
+      const Leaf& leaf = tree.leaves[leafIndex];
+      const auto base = static_cast<uint32_t>(mVertices.size());
+      for (int c = 0; c < 4; ++c) {
+        glm::vec2 uv = leaf.cornerUv(c);
+        uv.x += 2.0f * float(leaf.texture);  // the shader reads the texture index from uv.x
+        mVertices.push_back({leaf.corner(c), leaf.normal, uv});
+      }
+      for (uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) mIndices.push_back(base + k);
+    }
+    mLeafImages.clear();
+    for (const LeafTexture& t : tree.leafTextures) {
+      if (t.front.width != tree.leafTextures[0].front.width ||
+          t.front.height != tree.leafTextures[0].front.height) {
+        throwInputError(
+            "bbox_hierarchy: leaf textures of different sizes in '{}' are not supported",
+            tree.name);
+      }
+      mLeafImages.push_back(t.front);
+      mLeafImages.push_back(
+          t.back.width == t.front.width && t.back.height == t.front.height ? t.back : t.front);
+    }
+    // Report: textured boxes and texture memory per level (§3.2.4), bytes per level on disk order.
+    std::map<int32_t, std::pair<int, uint64_t>> perLevel;
+    for (int32_t n : textured) {
+      auto& [boxes, bytes] = perLevel[mHierarchy.nodes[n].level];
+      ++boxes;
+      bytes += 6ull * mParams.textureSize * mParams.textureSize * 4;
+    }
+    nlohmann::json levels = nlohmann::json::array();
+    for (const auto& [level, value] : perLevel)
+      levels.push_back(
+          {{"level", level}, {"textured_boxes", value.first}, {"texel_bytes", value.second}});
+    mReport = {{"hierarchy", mHierarchy.source},
+               {"boxes", mHierarchy.nodes.size()},
+               {"textured_boxes", textured.size()},
+               {"levels", levels},
+               {"atlas", {atlas.layout.width, atlas.layout.height}}};
+    mTextured = textured;
+  }
+
+  void upload(gl::Device& device) override {
+    using gl::MemoryCategory;
+    mVbo = device.createBuffer(MemoryCategory::kGeometry, GL_ARRAY_BUFFER, mVertices,
+                               "box quads and leaves");
+    mIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mIndices,
+                               "box and leaf indices");
+    mVao = makeMeshVertexArray(mVbo, mIbo);
+    mAtlasTexture = uploadAlphaTestedTexture(device, mAtlas, true, "box images");
+    const ImageRgba8& first = mLeafImages.front();
+    mLeafTexture = device.createTexture({GL_TEXTURE_2D_ARRAY, first.width, first.height,
+                                         static_cast<int>(mLeafImages.size()), GL_SRGB8_ALPHA8,
+                                         true, MemoryCategory::kTexture, "leaf images"});
+    for (size_t layer = 0; layer < mLeafImages.size(); ++layer) {
+      device.uploadTextureLayer(mLeafTexture, static_cast<int>(layer), GL_RGBA, GL_UNSIGNED_BYTE,
+                                mLeafImages[layer].pixels.data());
+    }
+    device.generateMipmaps(mLeafTexture);
+    gl::setTextureSampling(mLeafTexture, true, false);
+    mProgram = device.createProgram({gl::embeddedShader("methods/bbox_hierarchy/box.vert"),
+                                     gl::embeddedShader("methods/bbox_hierarchy/box.frag")});
+    mDevice = &device;
+    mFrameOwner = device.owner() + "/frame";
+    if (mParams.drawWood) mWood.upload(device, true);
+  }
+
+  void draw(const FrameContext& frame, std::span<const Instance> instances) override {
+    if (instances.empty()) return;
+    // Focal length in pixels: the LoD distance of a box is its world size per texel times it.
+    const float focal = frame.projection[1][1] * 0.5f * float(frame.viewportSize.y);
+    std::vector<float> lodDistance(mHierarchy.nodes.size());
+    for (size_t n = 0; n < lodDistance.size(); ++n) lodDistance[n] = mWorldPerTexel[n] * focal;
+    std::vector<std::vector<glm::mat4>> boxLists(mHierarchy.nodes.size()),
+        leafLists(mHierarchy.nodes.size());
+    for (const Instance& instance : instances)
+      collectInstance(instance, frame, lodDistance, boxLists, leafLists);
+    // One buffer: box instances node by node, then leaf instances node by node.
+    std::vector<glm::mat4> matrices;
+    std::vector<std::pair<GLint, GLsizei>> boxRanges(boxLists.size()), leafRanges(leafLists.size());
+    for (size_t n = 0; n < boxLists.size(); ++n) {
+      boxRanges[n] = {static_cast<GLint>(matrices.size()),
+                      static_cast<GLsizei>(boxLists[n].size())};
+      matrices.insert(matrices.end(), boxLists[n].begin(), boxLists[n].end());
+    }
+    for (size_t n = 0; n < leafLists.size(); ++n) {
+      leafRanges[n] = {static_cast<GLint>(matrices.size()),
+                       static_cast<GLsizei>(leafLists[n].size())};
+      matrices.insert(matrices.end(), leafLists[n].begin(), leafLists[n].end());
+    }
+    uploadMatrices(matrices);
+    const gl::Api& g = gl::api();
+    mProgram.use();
+    setFrameUniforms(mProgram, frame);
+    mProgram.set("uAtlas", 0);
+    mProgram.set("uLeafImages", 1);
+    mProgram.set("uTwoSided",
+                 mLeafImages.size() >= 2 && mLeafImages[0].pixels != mLeafImages[1].pixels ? 1 : 0);
+    g.ActiveTexture(GL_TEXTURE0);
+    g.BindTexture(GL_TEXTURE_2D, mAtlasTexture.id());
+    g.ActiveTexture(GL_TEXTURE1);
+    g.BindTexture(GL_TEXTURE_2D_ARRAY, mLeafTexture.id());
+    g.ActiveTexture(GL_TEXTURE0);
+    g.BindVertexArray(mVao.id());
+    // Box quads with back-face culling: three of the six are seen (Fig. 3).
+    mProgram.set("uLeafMode", 0);
+    g.Enable(GL_CULL_FACE);
+    g.CullFace(GL_BACK);
+    for (size_t n = 0; n < boxRanges.size(); ++n) {
+      if (boxRanges[n].second == 0) continue;
+      bindInstanceMatrices(mMatrixBuffer.id(), 4, boxRanges[n].first);
+      g.DrawElementsInstanced(GL_TRIANGLES, 36, GL_UNSIGNED_INT,
+                              reinterpret_cast<const void*>(sizeof(uint32_t) * mBoxFirstIndex[n]),
+                              boxRanges[n].second);
+    }
+    g.Disable(GL_CULL_FACE);
+    mProgram.set("uLeafMode", 1);
+    for (size_t n = 0; n < leafRanges.size(); ++n) {
+      const BoxNode& node = mHierarchy.nodes[n];
+      if (leafRanges[n].second == 0 || node.leafEnd == node.leafBegin) continue;
+      bindInstanceMatrices(mMatrixBuffer.id(), 4, leafRanges[n].first);
+      g.DrawElementsInstanced(
+          GL_TRIANGLES, static_cast<GLsizei>((node.leafEnd - node.leafBegin) * 6), GL_UNSIGNED_INT,
+          reinterpret_cast<const void*>(sizeof(uint32_t) * (mLeafFirstIndex + node.leafBegin * 6)),
+          leafRanges[n].second);
+    }
+    g.BindVertexArray(0);
+    if (mParams.drawWood)
+      mWood.draw(frame, frame.instanceBuffer, 0, static_cast<GLsizei>(instances.size()));
+  }
+
+  nlohmann::json effectiveParams() const override { return writeParams(mParams); }
+  nlohmann::json bakeReport() const override { return mReport; }
+
+  void save(AssetFolder& asset) const override {
+    auto& header = asset.header();
+    header["method"] = "bbox_hierarchy";
+    header["params"] = effectiveParams();
+    header["report"] = mReport;
+    nlohmann::json nodes = nlohmann::json::array();
+    for (const BoxNode& n : mHierarchy.nodes) {
+      nodes.push_back(
+          {{"parent", n.parent},
+           {"children", n.children},
+           {"level", n.level},
+           {"box", {n.box.min.x, n.box.min.y, n.box.min.z, n.box.max.x, n.box.max.y, n.box.max.z}},
+           {"leaves", {n.leafBegin, n.leafEnd, n.subtreeLeafEnd}},
+           {"textured", n.textured}});
+    }
+    header["nodes"] = nodes;
+    header["source"] = mHierarchy.source;
+    header["textured_order"] = mTextured;
+    header["box_first_index"] = mBoxFirstIndex;
+    header["world_per_texel"] = mWorldPerTexel;
+    header["leaf_first_index"] = mLeafFirstIndex;
+    header["leaf_images"] = mLeafImages.size();
+    asset.writeBlob("vertices.bin", mVertices);
+    asset.writeBlob("indices.bin", mIndices);
+    asset.writeBlob("leaf_order.bin", mHierarchy.leafOrder);
+    asset.writeImage("box_images.png", mAtlas);  // boxes in level order: coarse first (§6)
+    for (size_t i = 0; i < mLeafImages.size(); ++i)
+      asset.writeImage(fmt::format("leaf_{}.png", i), mLeafImages[i]);
+    mWood.save(asset);
+    asset.writeHeader();
+  }
+
+  void load(AssetFolder& asset) override {
+    asset.readHeader();
+    const auto& header = asset.header();
+    const std::string folder = asset.folder().string();
+    if (header.value("method", "") != "bbox_hierarchy")
+      throwInputError("{}: not a bbox_hierarchy asset", folder);
+    mReport = header.at("report");
+    mHierarchy = {};
+    mHierarchy.source = header.at("source");
+    for (const auto& n : header.at("nodes")) {
+      BoxNode node;
+      node.parent = n.at("parent");
+      node.children = n.at("children").get<std::vector<int32_t>>();
+      node.level = n.at("level");
+      const auto& b = n.at("box");
+      node.box.min = {b[0], b[1], b[2]};
+      node.box.max = {b[3], b[4], b[5]};
+      node.leafBegin = n.at("leaves")[0];
+      node.leafEnd = n.at("leaves")[1];
+      node.subtreeLeafEnd = n.at("leaves")[2];
+      node.textured = n.at("textured");
+      mHierarchy.nodes.push_back(std::move(node));
+    }
+    mTextured = header.at("textured_order").get<std::vector<int32_t>>();
+    mBoxFirstIndex = header.at("box_first_index").get<std::vector<uint32_t>>();
+    mWorldPerTexel = header.at("world_per_texel").get<std::vector<float>>();
+    mLeafFirstIndex = header.at("leaf_first_index");
+    mVertices = asset.readBlobAs<MeshVertex>("vertices.bin");
+    mIndices = asset.readBlobAs<uint32_t>("indices.bin");
+    mHierarchy.leafOrder = asset.readBlobAs<uint32_t>("leaf_order.bin");
+    mAtlas = asset.readImage("box_images.png");
+    mLeafImages.clear();
+    for (size_t i = 0; i < header.at("leaf_images").get<size_t>(); ++i)
+      mLeafImages.push_back(asset.readImage(fmt::format("leaf_{}.png", i)));
+    for (uint32_t index : mIndices) {
+      if (index >= mVertices.size()) throwInputError("{}: corrupt indices", folder);
+    }
+    if (mBoxFirstIndex.size() != mHierarchy.nodes.size() ||
+        mWorldPerTexel.size() != mHierarchy.nodes.size() || mLeafImages.empty()) {
+      throwInputError("{}: corrupt box hierarchy header", folder);
+    }
+    mWood.load(asset);
+  }
+
+ private:
+  // Walks one instance's hierarchy (Fig. 4) from its viewer position and adds its matrix to the
+  // lists of what it draws; boxes within the transition band are drawn dissolved together with
+  // the finer level, on complementary pixels.
+  void collectInstance(const Instance& instance, const FrameContext& frame,
+                       const std::vector<float>& lodDistance,
+                       std::vector<std::vector<glm::mat4>>& boxLists,
+                       std::vector<std::vector<glm::mat4>>& leafLists) const {
+    const glm::mat4 model = instance.modelMatrix();
+    const glm::vec3 viewer =
+        glm::vec3(glm::affineInverse(model) * glm::vec4(frame.cameraPosition, 1.0f));
+    const float band = mParams.transition;
+    struct Item {
+      int32_t node;
+      float dissolve;  // inherited from a transitioning ancestor: keep below this threshold
+    };
+    std::vector<Item> stack{{0, 0.0f}};
+    const auto withDissolve = [&](float threshold, bool keepBelow) {
+      glm::mat4 m = model;
+      m[0][3] = threshold;
+      m[1][3] = keepBelow ? 1.0f : 0.0f;
+      return m;
+    };
+    while (!stack.empty()) {
+      const Item item = stack.back();
+      stack.pop_back();
+      const BoxNode& node = mHierarchy.nodes[item.node];
+      if (node.subtreeLeafEnd == node.leafBegin) continue;
+      const bool inherited = item.dissolve > 0.0f;
+      bool descend = true;
+      float childDissolve = item.dissolve;
+      if (node.textured && frame.forcedLevel < 0) {
+        const float distance = glm::length(viewer - node.box.center());
+        const float lod = lodDistance[item.node];
+        if (distance > lod * (1.0f + band)) {
+          boxLists[item.node].push_back(inherited ? withDissolve(item.dissolve, true) : model);
+          descend = false;
+        } else if (distance > lod && !inherited) {
+          // In the band: the box fades in as the viewer moves away, the finer level out.
+          const float hidden = 1.0f - (distance - lod) / (lod * band);
+          boxLists[item.node].push_back(withDissolve(hidden, false));
+          childDissolve = hidden;
+        }
+      } else if (node.textured && node.level >= frame.forcedLevel && frame.forcedLevel >= 0) {
+        boxLists[item.node].push_back(model);
+        descend = false;
+      }
+      if (!descend) continue;
+      if (node.leafEnd > node.leafBegin) {
+        leafLists[item.node].push_back(childDissolve > 0.0f ? withDissolve(childDissolve, true)
+                                                            : model);
+      }
+      for (auto it = node.children.rbegin(); it != node.children.rend(); ++it)
+        stack.push_back({*it, childDissolve});
+    }
+  }
+
+  void uploadMatrices(const std::vector<glm::mat4>& matrices) {
+    if (matrices.size() > mMatrixCapacity || !mMatrixBuffer.id()) {
+      mMatrixCapacity = std::max<size_t>(matrices.size() * 2, 64);
+      gl::Device::OwnerScope owner(*mDevice, mFrameOwner);
+      mMatrixBuffer = mDevice->createBuffer(
+          gl::MemoryCategory::kOther, GL_ARRAY_BUFFER, mMatrixCapacity * sizeof(glm::mat4), nullptr,
+          "per-frame box and leaf instance lists", GL_DYNAMIC_DRAW);
+    }
+    const gl::Api& g = gl::api();
+    g.BindBuffer(GL_ARRAY_BUFFER, mMatrixBuffer.id());
+    g.BufferSubData(GL_ARRAY_BUFFER, 0,
+                    static_cast<GLsizeiptr>(matrices.size() * sizeof(glm::mat4)), matrices.data());
+    g.BindBuffer(GL_ARRAY_BUFFER, 0);
+  }
+
+  BboxParams mParams;
+  BoxHierarchy mHierarchy;
+  std::vector<int32_t> mTextured;
+  std::vector<uint32_t> mBoxFirstIndex;
+  std::vector<float> mWorldPerTexel;
+  uint32_t mLeafFirstIndex = 0;
+  std::vector<MeshVertex> mVertices;
+  std::vector<uint32_t> mIndices;
+  ImageRgba8 mAtlas;
+  std::vector<ImageRgba8> mLeafImages;
+  nlohmann::json mReport;
+  gl::Buffer mVbo, mIbo, mMatrixBuffer;
+  size_t mMatrixCapacity = 0;
+  gl::VertexArray mVao;
+  gl::Texture mAtlasTexture, mLeafTexture;
+  gl::Program mProgram;
+  gl::Device* mDevice = nullptr;
+  std::string mFrameOwner;
+  WoodRenderer mWood;
+};
+
+}  // namespace
+
+void registerBboxHierarchy(MethodRegistry& registry) {
+  registry.add(
+      {"bbox_hierarchy", "bounding-box hierarchy of six images per box (Lluch et al. 2004)",
+       [](const nlohmann::json& params, const std::string& path) -> std::unique_ptr<Method> {
+         return std::make_unique<BboxHierarchy>(
+             readParams<BboxParams>(params, path, "bbox_hierarchy"));
+       }});
+}
+
+}  // namespace canopy

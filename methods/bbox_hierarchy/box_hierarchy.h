@@ -1,0 +1,54 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "common/tree.h"
+
+namespace canopy {
+
+// The bounding-box hierarchy of Lluch, Camahort and Vivó (2004) §3: one node per branch, its box
+// bounding the branch and all its children, in pre-order. Leaves are referred to through
+// `leafOrder`, in which a node's own leaves are [leafBegin, leafEnd) and its subtree's
+// [leafBegin, subtreeLeafEnd).
+struct BoxNode {
+  int32_t parent = -1;
+  std::vector<int32_t> children;
+  int32_t level = 0;
+  Aabb box;
+  uint32_t leafBegin = 0;
+  uint32_t leafEnd = 0;
+  uint32_t subtreeLeafEnd = 0;
+  bool textured = false;  // has six images (level pruning, §3.2.4, decides)
+};
+
+struct BoxHierarchy {
+  std::vector<BoxNode> nodes;
+  std::vector<uint32_t> leafOrder;  // indices into Tree::leaves
+  std::string source;               // "branches" (the L-system's PUSH/POP) or "spatial"
+};
+
+// The tree's own branch hierarchy (built-in trees: the turtle's PUSH/POP boxes).
+BoxHierarchy hierarchyFromBranches(const Tree& tree);
+// A hierarchy of the leaves only: boxes split at the median along their longest axis until a box
+// holds at most `maxLeaves` leaves. The fallback for models without a branch hierarchy.
+BoxHierarchy spatialHierarchy(const Tree& tree, int maxLeaves);
+
+// §3.2.4: a node gets textures only when its box volume over its parent's is at least
+// `threshold`; the root always does. Nodes with no leaves in their subtree get none.
+void pruneByVolumeRatio(BoxHierarchy& hierarchy, float threshold);
+
+// The walk of Fig. 4: a textured box whose distance to the viewer exceeds its LoD distance is
+// drawn as its images and its subtree skipped; otherwise its own leaves are drawn as polygons
+// and its children visited. Untextured boxes are always opened.
+struct HierarchyWalk {
+  std::vector<int32_t> boxes;      // nodes drawn as images
+  std::vector<int32_t> leafNodes;  // nodes whose own leaves are drawn as polygons
+};
+void walkHierarchy(const BoxHierarchy& hierarchy, const std::vector<float>& lodDistance,
+                   const glm::vec3& viewer, HierarchyWalk& walk);
+
+}  // namespace canopy

@@ -1,0 +1,171 @@
+#include "methods/bbox_hierarchy/box_hierarchy.h"
+
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include <glm/geometric.hpp>
+
+#include "bench/harness.h"
+#include "common/error.h"
+#include "common/lsystem.h"
+#include "common/metrics.h"
+#include "methods/method.h"
+#include "test_support.h"
+
+namespace canopy {
+namespace {
+
+std::vector<BoxHierarchy> hierarchiesOf(const Tree& tree) {
+  return {hierarchyFromBranches(tree), spatialHierarchy(tree, 50)};
+}
+
+TEST(BoxHierarchy, EveryLeafLiesInExactlyOneBoxPerLevel) {
+  const Tree tree = test::smallTree(1200, 3);
+  for (const BoxHierarchy& h : hierarchiesOf(tree)) {
+    int maxLevel = 0;
+    for (const BoxNode& n : h.nodes) maxLevel = std::max(maxLevel, n.level);
+    std::vector<int> depthOfLeaf(tree.leaves.size(), -1);  // level of the node that owns each leaf
+    for (const BoxNode& n : h.nodes) {
+      for (uint32_t i = n.leafBegin; i < n.leafEnd; ++i) depthOfLeaf[h.leafOrder[i]] = n.level;
+    }
+    for (int level = 0; level <= maxLevel; ++level) {
+      std::vector<int> count(tree.leaves.size(), 0);
+      for (const BoxNode& n : h.nodes) {
+        if (n.level != level) continue;
+        for (uint32_t i = n.leafBegin; i < n.subtreeLeafEnd; ++i) {
+          ++count[h.leafOrder[i]];
+          for (int c = 0; c < 4; ++c) {
+            EXPECT_TRUE(n.box.contains(tree.leaves[h.leafOrder[i]].corner(c), 1e-4f)) << h.source;
+          }
+        }
+      }
+      // A leaf owned at this level or deeper is in exactly one box of the level; others in none.
+      for (size_t l = 0; l < tree.leaves.size(); ++l) {
+        ASSERT_GE(depthOfLeaf[l], 0);
+        EXPECT_EQ(count[l], depthOfLeaf[l] >= level ? 1 : 0)
+            << h.source << " level " << level << " leaf " << l;
+      }
+    }
+  }
+}
+
+TEST(BoxHierarchy, VolumeRatioPruningKeepsTheRootAndPrunesSmallBoxes) {
+  const Tree tree = test::smallTree(1200, 3);
+  BoxHierarchy h = hierarchyFromBranches(tree);
+  pruneByVolumeRatio(h, 1.0f);  // no child is as big as its parent
+  EXPECT_TRUE(h.nodes[0].textured);
+  for (size_t n = 1; n < h.nodes.size(); ++n) {
+    const float ratio = h.nodes[n].box.volume() / h.nodes[h.nodes[n].parent].box.volume();
+    EXPECT_EQ(h.nodes[n].textured,
+              ratio >= 1.0f && h.nodes[n].subtreeLeafEnd > h.nodes[n].leafBegin);
+  }
+  pruneByVolumeRatio(h, 0.0f);
+  size_t textured = 0;
+  for (const BoxNode& n : h.nodes) textured += n.textured;
+  EXPECT_GT(textured, 1u);
+}
+
+TEST(BoxHierarchy, TheWalkDrawsEveryLeafExactlyOnceAtAnyDistance) {
+  const Tree tree = test::smallTree(1200, 3);
+  for (BoxHierarchy h : hierarchiesOf(tree)) {
+    pruneByVolumeRatio(h, 0.05f);
+    std::vector<float> lod(h.nodes.size());
+    for (size_t n = 0; n < lod.size(); ++n) lod[n] = 3.0f * glm::length(h.nodes[n].box.extent());
+    for (float distance : {0.0f, 0.5f, 2.0f, 5.0f, 10.0f, 30.0f, 1000.0f}) {
+      const glm::vec3 viewer = tree.bounds.center() +
+                               glm::vec3(0.3f, 0.2f, 1.0f) * distance * tree.boundingSphereRadius();
+      HierarchyWalk walk;
+      walkHierarchy(h, lod, viewer, walk);
+      std::vector<int> drawn(tree.leaves.size(), 0);
+      for (int32_t n : walk.boxes) {
+        EXPECT_TRUE(h.nodes[n].textured);
+        for (uint32_t i = h.nodes[n].leafBegin; i < h.nodes[n].subtreeLeafEnd; ++i)
+          ++drawn[h.leafOrder[i]];
+      }
+      for (int32_t n : walk.leafNodes) {
+        for (uint32_t i = h.nodes[n].leafBegin; i < h.nodes[n].leafEnd; ++i)
+          ++drawn[h.leafOrder[i]];
+      }
+      for (size_t l = 0; l < drawn.size(); ++l)
+        ASSERT_EQ(drawn[l], 1) << h.source << " distance " << distance << " leaf " << l;
+      if (distance >= 1000.0f)
+        EXPECT_EQ(walk.boxes, std::vector<int32_t>{0}) << "far away: the root's images only";
+      if (distance == 0.0f)
+        EXPECT_FALSE(walk.leafNodes.empty()) << "inside the tree: nearby leaves as polygons";
+    }
+  }
+}
+
+// A box image seen along its face direction matches the polygonal leaves inside the box.
+TEST(BboxHierarchy, BoxImageMatchesTheLeavesInsideTheBox) {
+  auto context = test::makeTestContext();
+  gl::Ledger ledger;
+  gl::Device device(ledger);
+  // Large leaves, so they cover several pixels where the root box is drawn as images.
+  LSystemTreeParams params = treePreset("sparse");
+  params.leaves = 300;
+  params.leafLength = 0.9f;
+  params.leafWidth = 0.5f;
+  params.leafTextureSize = 64;
+  const Tree tree = generateTree(params, 3);
+  RenderSettings settings;
+  settings.width = settings.height = 96;
+  settings.fovYDegrees = 10.0f;
+  Harness harness(device, settings);
+  const float radius = tree.boundingSphereRadius();
+  Camera camera;  // along +Z, far enough that the root box is drawn as its images
+  camera.target = tree.bounds.center();
+  camera.position = camera.target + glm::vec3(0, 0, 1) * (radius * 20.0f);
+  camera.fovYDegrees = settings.fovYDegrees;
+  camera.nearPlane = radius * 15.0f;
+  camera.farPlane = radius * 25.0f;
+  const auto render = [&](const std::string& name, const nlohmann::json& params) {
+    auto m = builtinMethods().find(name).create(params, "test");
+    BakeContext ctx;
+    m->bake(tree, ctx);
+    gl::Device::OwnerScope scope(device, name);
+    m->upload(device);
+    return harness.render(*m, camera);
+  };
+  // Only the root has images (volume ratio 1), about one texel per pixel of the view.
+  const ImageRgba8 reference = render("polygonal", {{"wood", false}});
+  const ImageRgba8 boxes =
+      render("bbox_hierarchy",
+             {{"wood", false}, {"texture_size", 128}, {"transition", 0.0}, {"volume_ratio", 1.0}});
+  const ImageMetrics metrics = compareImages(reference, boxes);
+  if (std::getenv("CANOPY_DUMP")) {
+    writePng("/tmp/cb/box_ref.png", withOpaqueAlpha(reference));
+    writePng("/tmp/cb/box_img.png", withOpaqueAlpha(boxes));
+  }
+  std::printf("root box image vs its leaves: PSNR %.2f dB, SSIM %.3f, coverage error %.4f\n",
+              metrics.psnr, metrics.ssim, metrics.coverageError);
+  // Floor: the capture is orthographic onto the plane through the box centre, the view a narrow
+  // perspective (10°): differences come from resampling and from the leaves' depth spread
+  // (parallax of up to a few pixels at the frame's edge). Measured here: 21.1 dB, SSIM 0.85,
+  // coverage error 0.15; the floors leave about 3 dB and 0.15 SSIM for other drivers' filtering,
+  // while a misplaced or mirrored image loses the structure SSIM measures.
+  EXPECT_GT(metrics.psnr, 18.0);
+  EXPECT_GT(metrics.ssim, 0.7);
+  EXPECT_LT(metrics.coverageError, 0.25);
+}
+
+TEST(BboxHierarchy, BadParametersNameTheParameter) {
+  const auto& create = builtinMethods().find("bbox_hierarchy").create;
+  for (const auto& [key, value] :
+       std::vector<std::pair<std::string, nlohmann::json>>{{"texture_size", 0},
+                                                           {"volume_ratio", 2.0},
+                                                           {"arrangement", "star"},
+                                                           {"hierarchy", "octree"},
+                                                           {"transition", -1.0}}) {
+    try {
+      create({{key, value}}, "test");
+      FAIL() << key;
+    } catch (const InputError& error) {
+      EXPECT_NE(std::string(error.what()).find(key), std::string::npos) << error.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace canopy
