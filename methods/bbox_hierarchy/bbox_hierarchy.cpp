@@ -25,6 +25,7 @@ struct BboxParams {
   std::string arrangement = "cross";  // "cross" (Fig. 3) or "diagonal" (Fig. 6)
   float transition = 0.25f;  // blend band beyond a box's LoD distance, as a fraction of it (0: pop)
   std::string hierarchy = "auto";  // "auto", "branches" (the L-system's) or "spatial" (leaves only)
+  int minBoxLeaves = 16;           // no images for boxes holding fewer leaves (drawn as polygons)
   int spatialLeaves = 200;         // spatial hierarchy: at most this many leaves per finest box
   int supersample = 4;             // capture samples per texel side
   bool drawWood = true;            // draw the trunk and branches as geometry
@@ -35,7 +36,8 @@ struct BboxParams {
     v("volume_ratio", volumeRatio, 0.0f, 1.0f);
     v("arrangement", arrangement, {"cross", "diagonal"});
     v("transition", transition, 0.0f, 10.0f);
-    v("hierarchy", hierarchy, {"auto", "branches", "spatial"});
+    v("hierarchy", hierarchy, {"auto", "branches", "wood", "spatial"});
+    v("min_box_leaves", minBoxLeaves, 1, 1000000);
     v("spatial_leaves", spatialLeaves, 1, 1000000);
     v("supersample", supersample, 1, 8);
     v("wood", drawWood);
@@ -92,10 +94,22 @@ class BboxHierarchy final : public Method {
           "hierarchy",
           tree.name);
     }
-    mHierarchy = (mParams.hierarchy == "spatial" || !hasBranches)
-                     ? spatialHierarchy(tree, mParams.spatialLeaves)
-                     : hierarchyFromBranches(tree);
-    pruneByVolumeRatio(mHierarchy, mParams.volumeRatio);
+    // auto: the L-system's boxes, else boxes derived from the wood, else a spatial hierarchy.
+    mHierarchy = {};
+    if (mParams.hierarchy == "branches" || (mParams.hierarchy == "auto" && hasBranches)) {
+      mHierarchy = hierarchyFromBranches(tree);
+    } else if (mParams.hierarchy != "spatial") {
+      mHierarchy = woodHierarchy(tree);
+      if (mHierarchy.nodes.empty() && mParams.hierarchy == "wood") {
+        throwInputError(
+            "bbox_hierarchy: parameter 'hierarchy' = \"wood\", but the wood of '{}' has fewer than "
+            "two parts",
+            tree.name);
+      }
+    }
+    if (mHierarchy.nodes.empty()) mHierarchy = spatialHierarchy(tree, mParams.spatialLeaves);
+    pruneByVolumeRatio(mHierarchy, mParams.volumeRatio,
+                       static_cast<uint32_t>(mParams.minBoxLeaves));
     // Six images per textured box (§3.2.2): the leaves of its subtree, orthographically.
     const LeafImageSampler sampler(tree);
     std::vector<int32_t> textured;

@@ -1,7 +1,9 @@
 #include "methods/bbox_hierarchy/box_hierarchy.h"
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
+#include <tuple>
 
 #include <glm/geometric.hpp>
 
@@ -28,6 +30,64 @@ BoxHierarchy hierarchyFromBranches(const Tree& tree) {
 }
 
 namespace {
+
+// Nearest-point queries over a set of points with a uniform grid.
+class PointGrid {
+ public:
+  PointGrid(const std::vector<glm::vec3>& points, const Aabb& bounds)
+      : mPoints(points), mBounds(bounds) {
+    const float diagonal = glm::length(bounds.extent());
+    mCell = std::max(diagonal / 64.0f, 1e-6f);
+    mSize = glm::max(glm::ivec3(glm::ceil(bounds.extent() / mCell)), glm::ivec3(1));
+    mCells.resize(size_t(mSize.x) * mSize.y * mSize.z);
+    for (uint32_t i = 0; i < points.size(); ++i) mCells[cellIndex(cellOf(points[i]))].push_back(i);
+  }
+
+  // Index of the nearest point accepted by `accept`, or UINT32_MAX.
+  template <typename Accept>
+  uint32_t nearest(const glm::vec3& query, Accept accept) const {
+    const glm::ivec3 centre = cellOf(query);
+    uint32_t best = UINT32_MAX;
+    float bestDistance = std::numeric_limits<float>::max();
+    const int maxRing = std::max({mSize.x, mSize.y, mSize.z});
+    for (int ring = 0; ring <= maxRing; ++ring) {
+      // Points in rings beyond this one are at least (ring − 1) cells away.
+      if (best != UINT32_MAX && float(ring - 1) * mCell > std::sqrt(bestDistance)) break;
+      for (int z = centre.z - ring; z <= centre.z + ring; ++z) {
+        for (int y = centre.y - ring; y <= centre.y + ring; ++y) {
+          for (int x = centre.x - ring; x <= centre.x + ring; ++x) {
+            if (std::max({std::abs(x - centre.x), std::abs(y - centre.y),
+                          std::abs(z - centre.z)}) != ring)
+              continue;
+            if (x < 0 || y < 0 || z < 0 || x >= mSize.x || y >= mSize.y || z >= mSize.z) continue;
+            for (uint32_t i : mCells[cellIndex({x, y, z})]) {
+              if (!accept(i)) continue;
+              const glm::vec3 d = mPoints[i] - query;
+              const float distance = glm::dot(d, d);
+              if (distance < bestDistance || (distance == bestDistance && i < best))
+                bestDistance = distance, best = i;
+            }
+          }
+        }
+      }
+    }
+    return best;
+  }
+
+ private:
+  glm::ivec3 cellOf(const glm::vec3& p) const {
+    return glm::clamp(glm::ivec3(glm::floor((p - mBounds.min) / mCell)), glm::ivec3(0), mSize - 1);
+  }
+  size_t cellIndex(const glm::ivec3& c) const {
+    return (size_t(c.z) * mSize.y + c.y) * mSize.x + c.x;
+  }
+
+  const std::vector<glm::vec3>& mPoints;
+  Aabb mBounds;
+  float mCell = 1.0f;
+  glm::ivec3 mSize{1};
+  std::vector<std::vector<uint32_t>> mCells;
+};
 
 void splitSpatially(const Tree& tree, BoxHierarchy& hierarchy, std::vector<uint32_t>& leaves,
                     size_t begin, size_t end, int32_t parent, int32_t level, int maxLeaves) {
@@ -74,10 +134,118 @@ BoxHierarchy spatialHierarchy(const Tree& tree, int maxLeaves) {
   return hierarchy;
 }
 
-void pruneByVolumeRatio(BoxHierarchy& hierarchy, float threshold) {
+BoxHierarchy woodHierarchy(const Tree& tree) {
+  const WoodMesh& wood = tree.wood;
+  BoxHierarchy hierarchy;
+  hierarchy.source = "wood";
+  if (wood.positions.empty()) return hierarchy;
+  // Connected parts: union-find over triangles and over vertices at the same position.
+  std::vector<uint32_t> parent(wood.positions.size());
+  std::iota(parent.begin(), parent.end(), 0u);
+  const auto find = [&](uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  const auto join = [&](uint32_t a, uint32_t b) {
+    a = find(a), b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  };
+  for (size_t t = 0; t < wood.indices.size(); t += 3) {
+    join(wood.indices[t], wood.indices[t + 1]);
+    join(wood.indices[t], wood.indices[t + 2]);
+  }
+  {
+    std::vector<uint32_t> order(wood.positions.size());
+    std::iota(order.begin(), order.end(), 0u);
+    const auto less = [&](uint32_t a, uint32_t b) {
+      const glm::vec3 &p = wood.positions[a], &q = wood.positions[b];
+      return std::tie(p.x, p.y, p.z, a) < std::tie(q.x, q.y, q.z, b);
+    };
+    std::sort(order.begin(), order.end(), less);
+    for (size_t i = 1; i < order.size(); ++i) {
+      if (wood.positions[order[i]] == wood.positions[order[i - 1]]) join(order[i], order[i - 1]);
+    }
+  }
+  // Parts in order of their lowest point (ties by first vertex): the trunk first.
+  std::vector<uint32_t> partOf(wood.positions.size());
+  std::vector<uint32_t> roots;
+  std::vector<int32_t> partIndex(wood.positions.size(), -1);
+  for (uint32_t v = 0; v < wood.positions.size(); ++v) {
+    const uint32_t r = find(v);
+    if (partIndex[r] < 0) partIndex[r] = static_cast<int32_t>(roots.size()), roots.push_back(r);
+    partOf[v] = static_cast<uint32_t>(partIndex[r]);
+  }
+  const size_t parts = roots.size();
+  if (parts < 2) return hierarchy;
+  std::vector<uint32_t> lowest(parts, UINT32_MAX);
+  std::vector<Aabb> partBox(parts);
+  for (uint32_t v = 0; v < wood.positions.size(); ++v) {
+    const uint32_t p = partOf[v];
+    partBox[p].extend(wood.positions[v]);
+    if (lowest[p] == UINT32_MAX || wood.positions[v].y < wood.positions[lowest[p]].y) lowest[p] = v;
+  }
+  std::vector<uint32_t> byHeight(parts);
+  std::iota(byHeight.begin(), byHeight.end(), 0u);
+  std::stable_sort(byHeight.begin(), byHeight.end(), [&](uint32_t a, uint32_t b) {
+    return wood.positions[lowest[a]].y < wood.positions[lowest[b]].y;
+  });
+  std::vector<uint32_t> rank(parts);
+  for (uint32_t i = 0; i < parts; ++i) rank[byHeight[i]] = i;
+  Aabb bounds = tree.bounds;
+  const PointGrid grid(wood.positions, bounds);
+  std::vector<int32_t> partParent(parts, -1);
+  for (uint32_t i = 1; i < parts; ++i) {
+    const uint32_t p = byHeight[i];
+    const uint32_t v =
+        grid.nearest(wood.positions[lowest[p]], [&](uint32_t u) { return rank[partOf[u]] < i; });
+    partParent[p] = static_cast<int32_t>(partOf[v]);
+  }
+  // Leaves hang on the part nearest their centre.
+  std::vector<uint32_t> leafPart(tree.leaves.size());
+  for (size_t l = 0; l < tree.leaves.size(); ++l) {
+    leafPart[l] = partOf[grid.nearest(tree.leaves[l].center, [](uint32_t) { return true; })];
+  }
+  // Nodes in pre-order from the trunk, children in height order.
+  std::vector<std::vector<uint32_t>> partChildren(parts);
+  for (uint32_t i = 1; i < parts; ++i) partChildren[partParent[byHeight[i]]].push_back(byHeight[i]);
+  std::vector<std::vector<uint32_t>> partLeaves(parts);
+  for (uint32_t l = 0; l < tree.leaves.size(); ++l) partLeaves[leafPart[l]].push_back(l);
+  std::vector<std::pair<uint32_t, int32_t>> stack{{byHeight[0], -1}};
+  while (!stack.empty()) {
+    const auto [p, parentNode] = stack.back();
+    stack.pop_back();
+    const auto index = static_cast<int32_t>(hierarchy.nodes.size());
+    BoxNode node;
+    node.parent = parentNode;
+    node.level = parentNode < 0 ? 0 : hierarchy.nodes[parentNode].level + 1;
+    node.box = partBox[p];
+    node.leafBegin = static_cast<uint32_t>(hierarchy.leafOrder.size());
+    for (uint32_t l : partLeaves[p]) {
+      hierarchy.leafOrder.push_back(l);
+      for (int c = 0; c < 4; ++c) node.box.extend(tree.leaves[l].corner(c));
+    }
+    node.leafEnd = static_cast<uint32_t>(hierarchy.leafOrder.size());
+    if (parentNode >= 0) hierarchy.nodes[parentNode].children.push_back(index);
+    hierarchy.nodes.push_back(std::move(node));
+    for (auto it = partChildren[p].rbegin(); it != partChildren[p].rend(); ++it)
+      stack.push_back({*it, index});
+  }
+  // Subtree leaf ranges and boxes, bottom-up (children follow their parent in pre-order).
+  for (size_t n = hierarchy.nodes.size(); n-- > 0;) {
+    BoxNode& node = hierarchy.nodes[n];
+    node.subtreeLeafEnd = node.leafEnd;
+    for (int32_t child : node.children) {
+      node.subtreeLeafEnd = std::max(node.subtreeLeafEnd, hierarchy.nodes[child].subtreeLeafEnd);
+      node.box.extend(hierarchy.nodes[child].box);
+    }
+  }
+  return hierarchy;
+}
+
+void pruneByVolumeRatio(BoxHierarchy& hierarchy, float threshold, uint32_t minLeaves) {
   for (size_t n = 0; n < hierarchy.nodes.size(); ++n) {
     BoxNode& node = hierarchy.nodes[n];
-    const bool hasLeaves = node.subtreeLeafEnd > node.leafBegin;
+    const bool hasLeaves = node.subtreeLeafEnd - node.leafBegin >= std::max(minLeaves, 1u);
     if (node.parent < 0) {
       node.textured = hasLeaves;
       continue;

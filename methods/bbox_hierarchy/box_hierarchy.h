@@ -33,13 +33,20 @@ struct BoxHierarchy {
 
 // The tree's own branch hierarchy (built-in trees: the turtle's PUSH/POP boxes).
 BoxHierarchy hierarchyFromBranches(const Tree& tree);
+// A branch hierarchy derived from the wood mesh, for models without an L-system: each connected
+// part of the wood (shared positions join triangles) is a branch; parts are ordered by their
+// lowest point and each hangs on the nearest part that starts lower (so the trunk is the root);
+// each leaf hangs on the part nearest its centre. Empty when the wood has fewer than two parts.
+BoxHierarchy woodHierarchy(const Tree& tree);
 // A hierarchy of the leaves only: boxes split at the median along their longest axis until a box
 // holds at most `maxLeaves` leaves. The fallback for models without a branch hierarchy.
 BoxHierarchy spatialHierarchy(const Tree& tree, int maxLeaves);
 
 // §3.2.4: a node gets textures only when its box volume over its parent's is at least
-// `threshold`; the root always does. Nodes with no leaves in their subtree get none.
-void pruneByVolumeRatio(BoxHierarchy& hierarchy, float threshold);
+// `threshold`; the root always does. Nodes with fewer than `minLeaves` leaves in their subtree get
+// none (not in the paper: models with thousands of twig parts would otherwise get thousands of
+// boxes whose few leaves are cheaper drawn as polygons).
+void pruneByVolumeRatio(BoxHierarchy& hierarchy, float threshold, uint32_t minLeaves = 1);
 
 // The walk of Fig. 4: a textured box whose distance to the viewer exceeds its LoD distance is
 // drawn as its images and its subtree skipped; otherwise its own leaves are drawn as polygons

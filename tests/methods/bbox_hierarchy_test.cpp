@@ -50,6 +50,56 @@ TEST(BoxHierarchy, EveryLeafLiesInExactlyOneBoxPerLevel) {
   }
 }
 
+// A wood mesh of three separate parts: a trunk and two branches starting on it at different
+// heights, the upper branch attached to the lower one's tip; a leaf beside each part.
+TEST(BoxHierarchy, WoodPartsBecomeBranchesHangingOnTheNearestLowerPart) {
+  Tree tree = test::smallTree(50);
+  tree.wood = {};
+  tree.branches.clear();
+  const auto addSegment = [&](glm::vec3 a, glm::vec3 b) {  // a thin triangle strip from a to b
+    const auto base = static_cast<uint32_t>(tree.wood.positions.size());
+    const glm::vec3 side(0.02f, 0, 0.02f);
+    for (const glm::vec3& p : {a - side, a + side, b - side, b + side}) {
+      tree.wood.positions.push_back(p);
+      tree.wood.normals.push_back({0, 0, 1});
+      tree.wood.uvs.push_back({0, 0});
+    }
+    tree.wood.indices.insert(tree.wood.indices.end(),
+                             {base, base + 1, base + 2, base + 1, base + 3, base + 2});
+    tree.wood.materialIds.insert(tree.wood.materialIds.end(), {0, 0});
+  };
+  addSegment({0, 0, 0}, {0, 4, 0});         // trunk
+  addSegment({0.05f, 1, 0}, {2, 2, 0});     // lower branch, starting on the trunk
+  addSegment({2.05f, 2.1f, 0}, {3, 4, 0});  // twig, starting at the lower branch's tip
+  Leaf leaf = tree.leaves[0];
+  leaf.branch = -1;
+  std::vector<Leaf> leaves;
+  for (const glm::vec3& c :
+       {glm::vec3(0.1f, 3.5f, 0.1f), glm::vec3(1.5f, 1.8f, 0.1f), glm::vec3(2.9f, 3.9f, 0.1f)}) {
+    leaf.center = c;
+    leaves.push_back(leaf);
+  }
+  tree.leaves = leaves;
+  finalizeTree(tree, "wood parts");
+  const BoxHierarchy h = woodHierarchy(tree);
+  ASSERT_EQ(h.nodes.size(), 3u);
+  EXPECT_EQ(h.source, "wood");
+  EXPECT_EQ(h.nodes[0].parent, -1);
+  EXPECT_EQ(h.nodes[1].parent, 0);  // the lower branch on the trunk
+  EXPECT_EQ(h.nodes[2].parent, 1);  // the twig on the lower branch, not on the trunk
+  EXPECT_EQ(h.nodes[2].level, 2);
+  // Each leaf on its nearest part; the root's range holds all three.
+  EXPECT_EQ(h.leafOrder[h.nodes[0].leafBegin], 0u);
+  EXPECT_EQ(h.leafOrder[h.nodes[1].leafBegin], 1u);
+  EXPECT_EQ(h.leafOrder[h.nodes[2].leafBegin], 2u);
+  EXPECT_EQ(h.nodes[0].subtreeLeafEnd - h.nodes[0].leafBegin, 3u);
+  EXPECT_TRUE(h.nodes[0].box.contains(h.nodes[2].box));
+  // One connected part: no hierarchy from the wood.
+  tree.wood.indices.insert(tree.wood.indices.end(), {0, 4, 8});
+  tree.wood.materialIds.push_back(0);
+  EXPECT_TRUE(woodHierarchy(tree).nodes.empty());
+}
+
 TEST(BoxHierarchy, VolumeRatioPruningKeepsTheRootAndPrunesSmallBoxes) {
   const Tree tree = test::smallTree(1200, 3);
   BoxHierarchy h = hierarchyFromBranches(tree);
@@ -64,6 +114,9 @@ TEST(BoxHierarchy, VolumeRatioPruningKeepsTheRootAndPrunesSmallBoxes) {
   size_t textured = 0;
   for (const BoxNode& n : h.nodes) textured += n.textured;
   EXPECT_GT(textured, 1u);
+  pruneByVolumeRatio(h, 0.0f, 40);  // boxes with fewer than 40 leaves get no images
+  for (const BoxNode& n : h.nodes) EXPECT_EQ(n.textured, n.subtreeLeafEnd - n.leafBegin >= 40);
+  EXPECT_TRUE(h.nodes[0].textured);
 }
 
 TEST(BoxHierarchy, TheWalkDrawsEveryLeafExactlyOnceAtAnyDistance) {
