@@ -6,6 +6,7 @@
 
 #include "common/config.h"
 #include "methods/common/billboard_cloud.h"
+#include "methods/common/cloud_levels.h"
 #include "methods/common/cloud_params.h"
 #include "methods/common/leaf_capture.h"
 #include "methods/common/lod_instances.h"
@@ -46,7 +47,8 @@ class BillboardCloudMethod final : public Method {
   }
 
   void bake(const Tree& tree, BakeContext& ctx) override {
-    mTreeBounds = tree.bounds;
+    mLevels = {};
+    mLevels.treeBounds = tree.bounds;
     mWood.bake(tree);
     const std::vector<BillboardCloud> clouds = buildBillboardCloudFamily(
         tree, mParams.cloud.clustering, mParams.cloud.divisors(), ctx.seed);
@@ -54,10 +56,8 @@ class BillboardCloudMethod final : public Method {
     // Texture size of every billboard at the requested density.
     std::vector<const Billboard*> billboards;
     std::vector<glm::ivec2> sizes;
-    mLevelRanges.clear();
     for (const BillboardCloud& cloud : clouds) {
-      mLevelRanges.push_back({static_cast<uint32_t>(billboards.size() * 6),
-                              static_cast<uint32_t>(cloud.billboards.size() * 6)});
+      mLevels.addLevel(billboards.size(), cloud.billboards.size());
       for (const Billboard& billboard : cloud.billboards) {
         billboards.push_back(&billboard);
         const auto texels = [&](float halfExtent) {
@@ -112,7 +112,7 @@ class BillboardCloudMethod final : public Method {
 
   void draw(const FrameContext& frame, std::span<const Instance> instances) override {
     if (instances.empty()) return;
-    mLod.update(frame, instances, mTreeBounds, mParams.cloud.thresholds());
+    mLod.update(frame, instances, mLevels.treeBounds, mParams.cloud.thresholds());
     const gl::Api& g = gl::api();
     mProgram.use();
     setFrameUniforms(mProgram, frame);
@@ -120,15 +120,7 @@ class BillboardCloudMethod final : public Method {
     g.ActiveTexture(GL_TEXTURE0);
     g.BindTexture(GL_TEXTURE_2D, mAtlasTexture.id());
     g.BindVertexArray(mVao.id());
-    const auto& ranges = mLod.ranges();
-    for (size_t level = 0; level < ranges.size() && level < mLevelRanges.size(); ++level) {
-      if (ranges[level].count == 0) continue;
-      bindInstanceMatrices(mLod.buffer(), 4, ranges[level].first);
-      g.DrawElementsInstanced(
-          GL_TRIANGLES, static_cast<GLsizei>(mLevelRanges[level].count), GL_UNSIGNED_INT,
-          reinterpret_cast<const void*>(sizeof(uint32_t) * mLevelRanges[level].first),
-          ranges[level].count);
-    }
+    mLevels.draw(mLod, {});
     g.BindVertexArray(0);
     if (mParams.drawWood)
       mWood.draw(frame, frame.instanceBuffer, 0, static_cast<GLsizei>(instances.size()));
@@ -142,10 +134,7 @@ class BillboardCloudMethod final : public Method {
     header["method"] = "billboard_cloud";
     header["params"] = effectiveParams();
     header["report"] = mReport;
-    header["bounds"] = {mTreeBounds.min.x, mTreeBounds.min.y, mTreeBounds.min.z,
-                        mTreeBounds.max.x, mTreeBounds.max.y, mTreeBounds.max.z};
-    header["levels"] = nlohmann::json::array();
-    for (const LevelRange& r : mLevelRanges) header["levels"].push_back({r.first, r.count});
+    mLevels.save(header);
     asset.writeBlob("vertices.bin", mVertices);
     asset.writeBlob("indices.bin", mIndices);
     asset.writeImage("atlas.png", mAtlas);
@@ -158,37 +147,20 @@ class BillboardCloudMethod final : public Method {
     const auto& header = asset.header();
     if (header.value("method", "") != "billboard_cloud")
       throwInputError("{}: not a billboard_cloud asset", asset.folder().string());
-    const auto& b = header.at("bounds");
-    mTreeBounds.min = {b[0], b[1], b[2]};
-    mTreeBounds.max = {b[3], b[4], b[5]};
     mReport = header.at("report");
-    mLevelRanges.clear();
-    for (const auto& r : header.at("levels")) mLevelRanges.push_back({r[0], r[1]});
     mVertices = asset.readBlobAs<MeshVertex>("vertices.bin");
     mIndices = asset.readBlobAs<uint32_t>("indices.bin");
     mAtlas = asset.readImage("atlas.png");
     mWood.load(asset);
-    for (uint32_t index : mIndices) {
-      if (index >= mVertices.size())
-        throwInputError("{}: corrupt billboard indices", asset.folder().string());
-    }
-    for (const LevelRange& r : mLevelRanges) {
-      if (size_t(r.first) + r.count > mIndices.size())
-        throwInputError("{}: corrupt level ranges", asset.folder().string());
-    }
+    validateIndices(mIndices, mVertices.size(), asset.folder().string());
+    mLevels.load(header, mIndices.size(), asset.folder().string());
   }
 
  private:
   static constexpr int kMaxAtlas = 16384;
-  struct LevelRange {
-    uint32_t first = 0;  // first index
-    uint32_t count = 0;  // indices
-  };
-
   BillboardCloudParams mParams;
-  Aabb mTreeBounds;
   nlohmann::json mReport;
-  std::vector<LevelRange> mLevelRanges;
+  CloudLevels mLevels;
   std::vector<MeshVertex> mVertices;
   std::vector<uint32_t> mIndices;
   ImageRgba8 mAtlas;

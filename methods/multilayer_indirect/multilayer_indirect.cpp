@@ -4,6 +4,7 @@
 
 #include "common/config.h"
 #include "methods/common/ambient_occlusion.h"
+#include "methods/common/cloud_levels.h"
 #include "methods/common/cloud_params.h"
 #include "methods/common/leaf_capture.h"
 #include "methods/common/leaf_orientations.h"
@@ -66,7 +67,8 @@ class MultilayerIndirect final : public Method {
   }
 
   void bake(const Tree& tree, BakeContext& ctx) override {
-    mTreeBounds = tree.bounds;
+    mLevels = {};
+    mLevels.treeBounds = tree.bounds;
     mWood.bake(tree);
     const uint32_t imageCount = orientedImageCount(tree.leafTextures.size(), mParams.bins);
     if (imageCount > 2048) {
@@ -84,10 +86,8 @@ class MultilayerIndirect final : public Method {
     layering.sprite = parseSpriteRule(mParams.sprite);
     layering.bins = mParams.bins;
     std::vector<const Billboard*> billboards;
-    mLevelRanges.clear();
     for (const BillboardCloud& cloud : clouds) {
-      mLevelRanges.push_back({static_cast<uint32_t>(billboards.size() * 6),
-                              static_cast<uint32_t>(cloud.billboards.size() * 6)});
+      mLevels.addLevel(billboards.size(), cloud.billboards.size());
       for (const Billboard& billboard : cloud.billboards) billboards.push_back(&billboard);
     }
     std::vector<glm::vec4> occlusion;
@@ -105,7 +105,7 @@ class MultilayerIndirect final : public Method {
     std::vector<glm::ivec2> cellSizes;
     // The far cloud draws its low-resolution texture only: it needs no hash cells or lists.
     const size_t layeredBillboards =
-        mLevelRanges.size() > kFarLevel ? mLevelRanges[kFarLevel].first / 6 : layered.size();
+        mLevels.ranges.size() > kFarLevel ? mLevels.ranges[kFarLevel].first / 6 : layered.size();
     for (size_t i = 0; i < layered.size(); ++i)
       cellSizes.push_back(i < layeredBillboards ? layered[i].cells : glm::ivec2(1));
     const AtlasLayout hashLayout = packAtlas(cellSizes, 0, 1);
@@ -207,12 +207,10 @@ class MultilayerIndirect final : public Method {
 
   void draw(const FrameContext& frame, std::span<const Instance> instances) override {
     if (instances.empty()) return;
-    mLod.update(frame, instances, mTreeBounds, mParams.cloud.thresholds());
+    mLod.update(frame, instances, mLevels.treeBounds, mParams.cloud.thresholds());
     const gl::Api& g = gl::api();
     g.BindVertexArray(mVao.id());
-    const auto& ranges = mLod.ranges();
-    for (size_t level = 0; level < ranges.size() && level < mLevelRanges.size(); ++level) {
-      if (ranges[level].count == 0) continue;
+    mLevels.draw(mLod, [&](size_t level) {
       const bool far = level >= kFarLevel;
       const gl::Program& program = far ? mFarProgram : mProgram;
       program.use();
@@ -224,12 +222,7 @@ class MultilayerIndirect final : public Method {
       } else {
         bindLayeredTextures(program);
       }
-      bindInstanceMatrices(mLod.buffer(), 4, ranges[level].first);
-      g.DrawElementsInstanced(
-          GL_TRIANGLES, static_cast<GLsizei>(mLevelRanges[level].count), GL_UNSIGNED_INT,
-          reinterpret_cast<const void*>(sizeof(uint32_t) * mLevelRanges[level].first),
-          ranges[level].count);
-    }
+    });
     g.ActiveTexture(GL_TEXTURE0);
     g.BindVertexArray(0);
     if (mParams.drawWood)
@@ -244,10 +237,7 @@ class MultilayerIndirect final : public Method {
     header["method"] = "multilayer_indirect";
     header["params"] = effectiveParams();
     header["report"] = mReport;
-    header["bounds"] = {mTreeBounds.min.x, mTreeBounds.min.y, mTreeBounds.min.z,
-                        mTreeBounds.max.x, mTreeBounds.max.y, mTreeBounds.max.z};
-    header["levels"] = nlohmann::json::array();
-    for (const LevelRange& r : mLevelRanges) header["levels"].push_back({r.first, r.count});
+    mLevels.save(header);
     header["hash_size"] = {mHashSize.x, mHashSize.y};
     header["lists_height"] = mListsHeight;
     header["leaf_images"] = mLeafImages.size();
@@ -269,12 +259,7 @@ class MultilayerIndirect final : public Method {
     const std::string folder = asset.folder().string();
     if (header.value("method", "") != "multilayer_indirect")
       throwInputError("{}: not a multilayer_indirect asset", folder);
-    const auto& b = header.at("bounds");
-    mTreeBounds.min = {b[0], b[1], b[2]};
-    mTreeBounds.max = {b[3], b[4], b[5]};
     mReport = header.at("report");
-    mLevelRanges.clear();
-    for (const auto& r : header.at("levels")) mLevelRanges.push_back({r[0], r[1]});
     mHashSize = {header.at("hash_size")[0], header.at("hash_size")[1]};
     mListsHeight = header.at("lists_height");
     mVertices = asset.readBlobAs<Vertex>("vertices.bin");
@@ -298,18 +283,12 @@ class MultilayerIndirect final : public Method {
       if (mLists[i] < 0.0f || mLists[i] >= float(mLeafImages.size()) + 0.5f)
         throwInputError("{}: list entry names a missing leaf image", folder);
     }
-    for (uint32_t index : mIndices) {
-      if (index >= mVertices.size()) throwInputError("{}: corrupt billboard indices", folder);
-    }
+    validateIndices(mIndices, mVertices.size(), asset.folder().string());
+    mLevels.load(header, mIndices.size(), asset.folder().string());
     mWood.load(asset);
   }
 
  private:
-  struct LevelRange {
-    uint32_t first = 0;
-    uint32_t count = 0;
-  };
-
   // What the full walk shows from the billboard's front, at lowres_texels_per_cell texels per
   // hash cell, 4×4 samples per texel: colour (linear mean) and coverage.
   ImageRgba8 captureLayers(const Billboard& billboard, const LayeredBillboard& layered) const {
@@ -388,9 +367,8 @@ class MultilayerIndirect final : public Method {
   }
 
   MultilayerParams mParams;
-  Aabb mTreeBounds;
   nlohmann::json mReport;
-  std::vector<LevelRange> mLevelRanges;
+  CloudLevels mLevels;
   std::vector<Vertex> mVertices;
   std::vector<uint32_t> mIndices;
   glm::ivec2 mHashSize{1, 1};

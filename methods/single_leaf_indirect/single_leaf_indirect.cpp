@@ -1,6 +1,7 @@
 #include "methods/single_leaf_indirect/single_leaf_indirect.h"
 
 #include "common/config.h"
+#include "methods/common/cloud_levels.h"
 #include "methods/common/cloud_params.h"
 #include "methods/common/leaf_capture.h"
 #include "methods/common/leaf_orientations.h"
@@ -45,7 +46,8 @@ class SingleLeafIndirect final : public Method {
   }
 
   void bake(const Tree& tree, BakeContext& ctx) override {
-    mTreeBounds = tree.bounds;
+    mLevels = {};
+    mLevels.treeBounds = tree.bounds;
     mWood.bake(tree);
     if (orientedImageCount(tree.leafTextures.size(), mParams.bins) >= 65535) {
       throwInputError(
@@ -56,10 +58,8 @@ class SingleLeafIndirect final : public Method {
     const float cellLength = mParams.cellSize * meanLeafLength(tree);
     std::vector<SingleLeafGrid> grids;
     std::vector<const Billboard*> billboards;
-    mLevelRanges.clear();
     for (const BillboardCloud& cloud : clouds) {
-      mLevelRanges.push_back({static_cast<uint32_t>(billboards.size() * 6),
-                              static_cast<uint32_t>(cloud.billboards.size() * 6)});
+      mLevels.addLevel(billboards.size(), cloud.billboards.size());
       for (SingleLeafGrid& grid :
            buildSingleLeafGrids(tree, cloud, cellLength, mParams.bins, mParams.maxCells)) {
         grids.push_back(std::move(grid));
@@ -154,7 +154,7 @@ class SingleLeafIndirect final : public Method {
 
   void draw(const FrameContext& frame, std::span<const Instance> instances) override {
     if (instances.empty()) return;
-    mLod.update(frame, instances, mTreeBounds, mParams.cloud.thresholds());
+    mLod.update(frame, instances, mLevels.treeBounds, mParams.cloud.thresholds());
     const gl::Api& g = gl::api();
     mProgram.use();
     setFrameUniforms(mProgram, frame);
@@ -166,15 +166,7 @@ class SingleLeafIndirect final : public Method {
     g.BindTexture(GL_TEXTURE_2D_ARRAY, mLeavesTexture.id());
     g.ActiveTexture(GL_TEXTURE0);
     g.BindVertexArray(mVao.id());
-    const auto& ranges = mLod.ranges();
-    for (size_t level = 0; level < ranges.size() && level < mLevelRanges.size(); ++level) {
-      if (ranges[level].count == 0) continue;
-      bindInstanceMatrices(mLod.buffer(), 4, ranges[level].first);
-      g.DrawElementsInstanced(
-          GL_TRIANGLES, static_cast<GLsizei>(mLevelRanges[level].count), GL_UNSIGNED_INT,
-          reinterpret_cast<const void*>(sizeof(uint32_t) * mLevelRanges[level].first),
-          ranges[level].count);
-    }
+    mLevels.draw(mLod, {});
     g.BindVertexArray(0);
     if (mParams.drawWood)
       mWood.draw(frame, frame.instanceBuffer, 0, static_cast<GLsizei>(instances.size()));
@@ -188,10 +180,7 @@ class SingleLeafIndirect final : public Method {
     header["method"] = "single_leaf_indirect";
     header["params"] = effectiveParams();
     header["report"] = mReport;
-    header["bounds"] = {mTreeBounds.min.x, mTreeBounds.min.y, mTreeBounds.min.z,
-                        mTreeBounds.max.x, mTreeBounds.max.y, mTreeBounds.max.z};
-    header["levels"] = nlohmann::json::array();
-    for (const LevelRange& r : mLevelRanges) header["levels"].push_back({r.first, r.count});
+    mLevels.save(header);
     header["index_size"] = {mIndexSize.x, mIndexSize.y};
     header["leaf_images"] = mLeafImages.size();
     asset.writeBlob("vertices.bin", mVertices);
@@ -209,12 +198,7 @@ class SingleLeafIndirect final : public Method {
     const std::string folder = asset.folder().string();
     if (header.value("method", "") != "single_leaf_indirect")
       throwInputError("{}: not a single_leaf_indirect asset", folder);
-    const auto& b = header.at("bounds");
-    mTreeBounds.min = {b[0], b[1], b[2]};
-    mTreeBounds.max = {b[3], b[4], b[5]};
     mReport = header.at("report");
-    mLevelRanges.clear();
-    for (const auto& r : header.at("levels")) mLevelRanges.push_back({r[0], r[1]});
     mIndexSize = {header.at("index_size")[0], header.at("index_size")[1]};
     mVertices = asset.readBlobAs<Vertex>("vertices.bin");
     mIndices = asset.readBlobAs<uint32_t>("indices.bin");
@@ -229,22 +213,15 @@ class SingleLeafIndirect final : public Method {
         throwInputError("{}: cell names leaf image {} of {}", folder, reference,
                         mLeafImages.size());
     }
-    for (uint32_t index : mIndices) {
-      if (index >= mVertices.size()) throwInputError("{}: corrupt billboard indices", folder);
-    }
+    validateIndices(mIndices, mVertices.size(), asset.folder().string());
+    mLevels.load(header, mIndices.size(), asset.folder().string());
     mWood.load(asset);
   }
 
  private:
-  struct LevelRange {
-    uint32_t first = 0;
-    uint32_t count = 0;
-  };
-
   SingleLeafParams mParams;
-  Aabb mTreeBounds;
   nlohmann::json mReport;
-  std::vector<LevelRange> mLevelRanges;
+  CloudLevels mLevels;
   std::vector<Vertex> mVertices;
   std::vector<uint32_t> mIndices;
   glm::ivec2 mIndexSize{1, 1};

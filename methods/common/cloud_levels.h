@@ -1,0 +1,40 @@
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/tree.h"
+#include "methods/common/lod_instances.h"
+
+namespace canopy {
+
+// The geometric levels of detail of a cloud-based method: one index range (6 indices per
+// billboard) per cloud in one index buffer, and the tree bounds LoD distances are measured from.
+struct CloudLevels {
+  struct Range {
+    uint32_t first = 0;  // first index
+    uint32_t count = 0;  // indices
+  };
+  std::vector<Range> ranges;
+  Aabb treeBounds;
+
+  // Appends a level of `billboards` quads after `billboardsBefore` quads.
+  void addLevel(size_t billboardsBefore, size_t billboards);
+  // Draws every level's instances with the bound program and vertex array; `prepare(level)` runs
+  // before a level's draw (to switch programs), the instance matrices go to locations 4–7.
+  void draw(const LodInstances& lod, const std::function<void(size_t level)>& prepare) const;
+
+  void save(nlohmann::json& header) const;
+  // Reads what save wrote and checks it against the index buffer; InputError naming `folder`.
+  void load(const nlohmann::json& header, size_t indexCount, const std::string& folder);
+};
+
+// InputError naming `folder` when an index points past the vertices.
+void validateIndices(const std::vector<uint32_t>& indices, size_t vertexCount,
+                     const std::string& folder);
+
+}  // namespace canopy
