@@ -23,6 +23,21 @@ void AssetFolder::readHeader() {
   mHeader = readJsonFile((mFolder / "asset.json").string());
 }
 
+void AssetFolder::describe(const std::string& method, const nlohmann::json& params,
+                           const nlohmann::json& report) {
+  mHeader["method"] = method;
+  mHeader["params"] = params;
+  mHeader["report"] = report;
+}
+
+void AssetFolder::readHeaderOf(const std::string& method) {
+  readHeader();
+  if (mHeader.value("method", "") != method) {
+    throwInputError("{}: not a {} asset (asset.json names '{}')", mFolder.string(), method,
+                    mHeader.value("method", ""));
+  }
+}
+
 std::vector<uint8_t> AssetFolder::readBlob(const std::string& name) const {
   const auto path = mFolder / name;
   std::ifstream in(path, std::ios::binary);

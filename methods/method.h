@@ -60,8 +60,13 @@ class AssetFolder {
   }
   void writeImage(const std::string& name, const ImageRgba8& image);
   void writeHeader();
+  // Starts the header every asset has: the method, its effective parameters, its bake report.
+  void describe(const std::string& method, const nlohmann::json& params,
+                const nlohmann::json& report);
 
   void readHeader();
+  // Reads asset.json and checks it was written by `method`; InputError naming the folder otherwise.
+  void readHeaderOf(const std::string& method);
   std::vector<uint8_t> readBlob(const std::string& name) const;
   template <typename T>
   std::vector<T> readBlobAs(const std::string& name) const {

@@ -291,9 +291,7 @@ class BboxHierarchy final : public Method {
 
   void save(AssetFolder& asset) const override {
     auto& header = asset.header();
-    header["method"] = "bbox_hierarchy";
-    header["params"] = effectiveParams();
-    header["report"] = mReport;
+    asset.describe("bbox_hierarchy", effectiveParams(), mReport);
     nlohmann::json nodes = nlohmann::json::array();
     for (const BoxNode& n : mHierarchy.nodes) {
       nodes.push_back(
@@ -322,11 +320,9 @@ class BboxHierarchy final : public Method {
   }
 
   void load(AssetFolder& asset) override {
-    asset.readHeader();
+    asset.readHeaderOf("bbox_hierarchy");
     const auto& header = asset.header();
     const std::string folder = asset.folder().string();
-    if (header.value("method", "") != "bbox_hierarchy")
-      throwInputError("{}: not a bbox_hierarchy asset", folder);
     mReport = header.at("report");
     mHierarchy = {};
     mHierarchy.source = header.at("source");

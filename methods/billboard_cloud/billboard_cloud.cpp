@@ -131,9 +131,7 @@ class BillboardCloudMethod final : public Method {
 
   void save(AssetFolder& asset) const override {
     auto& header = asset.header();
-    header["method"] = "billboard_cloud";
-    header["params"] = effectiveParams();
-    header["report"] = mReport;
+    asset.describe("billboard_cloud", effectiveParams(), mReport);
     mLevels.save(header);
     asset.writeBlob("vertices.bin", mVertices);
     asset.writeBlob("indices.bin", mIndices);
@@ -143,10 +141,8 @@ class BillboardCloudMethod final : public Method {
   }
 
   void load(AssetFolder& asset) override {
-    asset.readHeader();
+    asset.readHeaderOf("billboard_cloud");
     const auto& header = asset.header();
-    if (header.value("method", "") != "billboard_cloud")
-      throwInputError("{}: not a billboard_cloud asset", asset.folder().string());
     mReport = header.at("report");
     mVertices = asset.readBlobAs<MeshVertex>("vertices.bin");
     mIndices = asset.readBlobAs<uint32_t>("indices.bin");

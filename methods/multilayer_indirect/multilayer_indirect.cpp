@@ -234,9 +234,7 @@ class MultilayerIndirect final : public Method {
 
   void save(AssetFolder& asset) const override {
     auto& header = asset.header();
-    header["method"] = "multilayer_indirect";
-    header["params"] = effectiveParams();
-    header["report"] = mReport;
+    asset.describe("multilayer_indirect", effectiveParams(), mReport);
     mLevels.save(header);
     header["hash_size"] = {mHashSize.x, mHashSize.y};
     header["lists_height"] = mListsHeight;
@@ -254,11 +252,9 @@ class MultilayerIndirect final : public Method {
   }
 
   void load(AssetFolder& asset) override {
-    asset.readHeader();
+    asset.readHeaderOf("multilayer_indirect");
     const auto& header = asset.header();
     const std::string folder = asset.folder().string();
-    if (header.value("method", "") != "multilayer_indirect")
-      throwInputError("{}: not a multilayer_indirect asset", folder);
     mReport = header.at("report");
     mHashSize = {header.at("hash_size")[0], header.at("hash_size")[1]};
     mListsHeight = header.at("lists_height");

@@ -111,8 +111,7 @@ class Polygonal final : public Method {
 
   void save(AssetFolder& asset) const override {
     auto& header = asset.header();
-    header["method"] = "polygonal";
-    header["params"] = effectiveParams();
+    asset.describe("polygonal", effectiveParams(), nlohmann::json::object());
     asset.writeBlob("leaf_vertices.bin", mVertices);
     asset.writeBlob("leaf_indices.bin", mIndices);
     asset.writeBlob("leaf_ranges.bin", mRanges);
@@ -126,11 +125,9 @@ class Polygonal final : public Method {
   }
 
   void load(AssetFolder& asset) override {
-    asset.readHeader();
+    asset.readHeaderOf("polygonal");
     const auto& header = asset.header();
     const std::string folder = asset.folder().string();
-    if (header.value("method", "") != "polygonal")
-      throwInputError("{}: not a polygonal asset", folder);
     mVertices = asset.readBlobAs<MeshVertex>("leaf_vertices.bin");
     mIndices = asset.readBlobAs<uint32_t>("leaf_indices.bin");
     mRanges = asset.readBlobAs<LeafRange>("leaf_ranges.bin");

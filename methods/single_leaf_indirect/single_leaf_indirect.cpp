@@ -177,9 +177,7 @@ class SingleLeafIndirect final : public Method {
 
   void save(AssetFolder& asset) const override {
     auto& header = asset.header();
-    header["method"] = "single_leaf_indirect";
-    header["params"] = effectiveParams();
-    header["report"] = mReport;
+    asset.describe("single_leaf_indirect", effectiveParams(), mReport);
     mLevels.save(header);
     header["index_size"] = {mIndexSize.x, mIndexSize.y};
     header["leaf_images"] = mLeafImages.size();
@@ -193,11 +191,9 @@ class SingleLeafIndirect final : public Method {
   }
 
   void load(AssetFolder& asset) override {
-    asset.readHeader();
+    asset.readHeaderOf("single_leaf_indirect");
     const auto& header = asset.header();
     const std::string folder = asset.folder().string();
-    if (header.value("method", "") != "single_leaf_indirect")
-      throwInputError("{}: not a single_leaf_indirect asset", folder);
     mReport = header.at("report");
     mIndexSize = {header.at("index_size")[0], header.at("index_size")[1]};
     mVertices = asset.readBlobAs<Vertex>("vertices.bin");

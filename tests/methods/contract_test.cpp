@@ -130,6 +130,11 @@ TEST_P(MethodContract, SavedAssetLoadsAndRendersTheSame) {
     loaded->upload(*mDevice);
   }
   EXPECT_EQ(mLedger.totals("loaded").total(), mLedger.totals("original").total());
+  // Another method's asset is bad input, not a crash.
+  const std::string other = GetParam() == "polygonal" ? "billboard_cloud" : "polygonal";
+  auto wrong = builtinMethods().find(other).create(nlohmann::json::object(), "test");
+  AssetFolder again(dir.path());
+  EXPECT_THROW(wrong->load(again), InputError);
   EXPECT_EQ(mHarness->render(*method, camera(tree, 60.0f)),
             mHarness->render(*loaded, camera(tree, 60.0f)));
 }
