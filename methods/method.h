@@ -14,6 +14,7 @@
 #include <glm/vec3.hpp>
 #include <nlohmann/json.hpp>
 
+#include "common/config.h"
 #include "common/error.h"
 #include "common/gl/device.h"
 #include "common/image.h"
@@ -124,6 +125,17 @@ class MethodRegistry {
  private:
   std::vector<MethodInfo> mMethods;
 };
+
+// Registers MethodType, built from a Params struct read from the config (readParams: typed,
+// range-checked, unknown keys rejected). Each method's register function calls it once.
+template <typename MethodType, typename Params>
+void addMethod(MethodRegistry& registry, const std::string& name, std::string description) {
+  registry.add(
+      {name, std::move(description),
+       [name](const nlohmann::json& params, const std::string& path) -> std::unique_ptr<Method> {
+         return std::make_unique<MethodType>(readParams<Params>(params, path, name));
+       }});
+}
 
 // The registry of every built-in method, filled by registry.cpp (one explicit call each).
 const MethodRegistry& builtinMethods();

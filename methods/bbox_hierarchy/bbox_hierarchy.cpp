@@ -457,12 +457,9 @@ class BboxHierarchy final : public Method {
 }  // namespace
 
 void registerBboxHierarchy(MethodRegistry& registry) {
-  registry.add(
-      {"bbox_hierarchy", "bounding-box hierarchy of six images per box (Lluch et al. 2004)",
-       [](const nlohmann::json& params, const std::string& path) -> std::unique_ptr<Method> {
-         return std::make_unique<BboxHierarchy>(
-             readParams<BboxParams>(params, path, "bbox_hierarchy"));
-       }});
+  addMethod<BboxHierarchy, BboxParams>(
+      registry, "bbox_hierarchy",
+      "bounding-box hierarchy of six images per box (Lluch et al. 2004)");
 }
 
 }  // namespace canopy

@@ -171,12 +171,9 @@ class BillboardCloudMethod final : public Method {
 }  // namespace
 
 void registerBillboardCloud(MethodRegistry& registry) {
-  registry.add(
-      {"billboard_cloud", "classic billboard cloud: one orthographic leaf texture per billboard",
-       [](const nlohmann::json& params, const std::string& path) -> std::unique_ptr<Method> {
-         return std::make_unique<BillboardCloudMethod>(
-             readParams<BillboardCloudParams>(params, path, "billboard_cloud"));
-       }});
+  addMethod<BillboardCloudMethod, BillboardCloudParams>(
+      registry, "billboard_cloud",
+      "classic billboard cloud: one orthographic leaf texture per billboard");
 }
 
 }  // namespace canopy

@@ -385,13 +385,9 @@ class MultilayerIndirect final : public Method {
 }  // namespace
 
 void registerMultilayerIndirect(MethodRegistry& registry) {
-  registry.add(
-      {"multilayer_indirect",
-       "multi-layer indirect texturing (García et al. 2007): lists of leaf fragments per hash cell",
-       [](const nlohmann::json& params, const std::string& path) -> std::unique_ptr<Method> {
-         return std::make_unique<MultilayerIndirect>(
-             readParams<MultilayerParams>(params, path, "multilayer_indirect"));
-       }});
+  addMethod<MultilayerIndirect, MultilayerParams>(
+      registry, "multilayer_indirect",
+      "multi-layer indirect texturing (García et al. 2007): lists of leaf fragments per hash cell");
 }
 
 }  // namespace canopy

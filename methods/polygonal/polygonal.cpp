@@ -163,11 +163,8 @@ class Polygonal final : public Method {
 }  // namespace
 
 void registerPolygonal(MethodRegistry& registry) {
-  registry.add(
-      {"polygonal", "the reference: wood mesh and every leaf quad with alpha test",
-       [](const nlohmann::json& params, const std::string& path) -> std::unique_ptr<Method> {
-         return std::make_unique<Polygonal>(readParams<PolygonalParams>(params, path, "polygonal"));
-       }});
+  addMethod<Polygonal, PolygonalParams>(
+      registry, "polygonal", "the reference: wood mesh and every leaf quad with alpha test");
 }
 
 }  // namespace canopy

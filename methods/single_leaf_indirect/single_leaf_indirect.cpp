@@ -234,12 +234,9 @@ class SingleLeafIndirect final : public Method {
 }  // namespace
 
 void registerSingleLeafIndirect(MethodRegistry& registry) {
-  registry.add(
-      {"single_leaf_indirect", "one leaf image per billboard grid cell (García et al. 2005)",
-       [](const nlohmann::json& params, const std::string& path) -> std::unique_ptr<Method> {
-         return std::make_unique<SingleLeafIndirect>(
-             readParams<SingleLeafParams>(params, path, "single_leaf_indirect"));
-       }});
+  addMethod<SingleLeafIndirect, SingleLeafParams>(
+      registry, "single_leaf_indirect",
+      "one leaf image per billboard grid cell (García et al. 2005)");
 }
 
 }  // namespace canopy
