@@ -54,8 +54,9 @@ TEST(BenchCli, RunsAConfigIntoTheResultsLayoutAndSkipsWhatIsDone) {
                               "psnr", "psnr_frame", "ssim", "coverage_error"}) {
         EXPECT_TRUE(record.contains(key)) << key;
       }
-      if (record.at("variant") == "polygonal")
+      if (record.at("variant") == "polygonal") {
         EXPECT_DOUBLE_EQ(record.at("psnr").get<double>(), 100.0);
+      }
     } else if (kind == "forest") {
       for (const char* key :
            {"trees", "frame_ms_median", "frame_ms_p95", "fps", "speedup_vs_polygonal"})

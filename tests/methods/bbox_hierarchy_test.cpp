@@ -142,10 +142,12 @@ TEST(BoxHierarchy, TheWalkDrawsEveryLeafExactlyOnceAtAnyDistance) {
       }
       for (size_t l = 0; l < drawn.size(); ++l)
         ASSERT_EQ(drawn[l], 1) << h.source << " distance " << distance << " leaf " << l;
-      if (distance >= 1000.0f)
+      if (distance >= 1000.0f) {
         EXPECT_EQ(walk.boxes, std::vector<int32_t>{0}) << "far away: the root's images only";
-      if (distance == 0.0f)
+      }
+      if (distance == 0.0f) {
         EXPECT_FALSE(walk.leafNodes.empty()) << "inside the tree: nearby leaves as polygons";
+      }
     }
   }
 }

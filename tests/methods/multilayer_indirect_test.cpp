@@ -53,9 +53,10 @@ TEST(LayeredBillboard, ListsAreFrontToBackAndHoldExactlyTheOverlappingSprites) {
           for (uint32_t k = 0; k < layered.listLength[cell]; ++k) {
             const LayerEntry& entry = layered.entries[layered.listStart[cell] + k];
             listed.insert(entry.leaf);
-            if (k > 0)
+            if (k > 0) {
               EXPECT_GE(layered.entries[layered.listStart[cell] + k - 1].depth, entry.depth)
                   << "front to back";
+            }
           }
           EXPECT_EQ(listed, expected) << "cell " << x << "," << y;
         }
