@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "bench/experiment.h"
+#include "bench/merge.h"
 #include "bench/runner.h"
 #include "common/error.h"
 #include "common/progress.h"
@@ -36,6 +37,12 @@ int main(int argc, char** argv) {
   exportTree->add_option("--seed", exportSeed, "L-system seed");
   exportTree->add_option("--leaves", exportLeaves, "leaf count (0: the preset's)");
   exportTree->add_option("--out", exportOut, "output folder")->required();
+  // canopy-bench merge OUT RUN... : joins shard outputs
+  CLI::App* merge = app.add_subcommand("merge", "join shard outputs into one run folder");
+  std::string mergeOut;
+  std::vector<std::string> mergeInputs;
+  merge->add_option("out", mergeOut, "output folder")->required();
+  merge->add_option("runs", mergeInputs, "run folders to join")->required();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
@@ -56,6 +63,12 @@ int main(int argc, char** argv) {
       if (exportLeaves < 0) throwInputError("--leaves: must be >= 0");
       const Tree tree = loadTree(spec);
       std::printf("%s\n", exportTreeObj(tree, exportOut).string().c_str());
+      return kExitOk;
+    }
+    if (*merge) {
+      if (quiet) spdlog::set_level(spdlog::level::warn);
+      std::vector<std::filesystem::path> inputs(mergeInputs.begin(), mergeInputs.end());
+      mergeRuns(inputs, mergeOut);
       return kExitOk;
     }
     if (configPath.empty())

@@ -28,7 +28,12 @@ std::string formatSummaryCsv(const std::vector<SummaryRow>& rows);
 std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std::string& title,
                                   const std::string& renderer);
 
-// Writes summary.csv and summary.md into `directory` atomically.
+// A booktabs table for a paper: per tree and method, bake time, memory, PSNR by distance ring,
+// SSIM, coverage error and FPS by forest size. Text is escaped for LaTeX.
+std::string formatSummaryLatex(const std::vector<SummaryRow>& rows, const std::string& title,
+                               const std::string& renderer);
+
+// Writes summary.csv, summary.md and summary.tex into `directory` atomically.
 void writeSummaries(const std::filesystem::path& directory,
                     const std::vector<nlohmann::json>& records, const std::string& title,
                     const std::string& renderer);

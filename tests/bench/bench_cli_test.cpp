@@ -125,6 +125,24 @@ TEST(BenchCli, ShardsTogetherMakeTheWholeRun) {
       shards.insert(key);  // both shards load the tree
   }
   EXPECT_EQ(shards, keysOf(dir / "all" / "metrics.jsonl"));
+  // merge joins the shards into one run: the same records as the unsharded run, once each.
+  ASSERT_EQ(test::runCommand(kBench + " --quiet merge " + (dir / "merged").string() + " " +
+                             (dir / "s0").string() + " " + (dir / "s1").string()),
+            0);
+  const auto merged = keysOf(dir / "merged" / "metrics.jsonl");
+  EXPECT_EQ(std::set<std::string>(merged.begin(), merged.end()).size(), merged.size());
+  const auto all = keysOf(dir / "all" / "metrics.jsonl");
+  EXPECT_EQ(std::set<std::string>(merged.begin(), merged.end()),
+            std::set<std::string>(all.begin(), all.end()));
+  for (const char* file : {"summary.csv", "summary.md", "summary.tex", "meta.json"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / "merged" / file)) << file;
+  }
+  std::string error;
+  EXPECT_EQ(
+      test::runCommand(
+          kBench + " merge " + (dir / "m2").string() + " " + (dir / "nothing").string(), &error),
+      2);
+  EXPECT_NE(error.find("nothing"), std::string::npos) << error;
 }
 
 TEST(BenchCli, KilledRunResumesWithoutLosingOrDuplicatingRecords) {
@@ -195,6 +213,59 @@ TEST(BenchCli, BadTreeFilesExitWithCode2NamingTheFile) {
   nan.replace(nan.find("v 1 0 0"), 7, "v nan 0 0");
   expectBadTree("non_finite", nan, false, "not finite");
   expectBadTree("garbage", "\x01\x02\x03 garbage \xff", false, "tree.obj");
+}
+
+}  // namespace
+}  // namespace canopy
+
+#include "bench/report.h"
+
+namespace canopy {
+namespace {
+
+TEST(Report, LatexTableHasOneCellPerColumnAndEscapesNames) {
+  std::vector<nlohmann::json> records = {
+      {{"kind", "bake"},
+       {"tree", "oak_1"},
+       {"method", "m"},
+       {"variant", "m[a=1]"},
+       {"bake_s", 1.5},
+       {"memory_bytes", {{"texture", 1e6}, {"geometry", 0}, {"other", 0}, {"total", 1e6}}},
+       {"disk_bytes", 5}},
+      {{"kind", "view"},
+       {"tree", "oak_1"},
+       {"method", "m"},
+       {"variant", "m[a=1]"},
+       {"distance", 4},
+       {"elevation", 0},
+       {"psnr", 20.0},
+       {"psnr_frame", 30.0},
+       {"ssim", 0.5},
+       {"coverage_error", 0.1}},
+      {{"kind", "forest"},
+       {"tree", "oak_1"},
+       {"method", "m"},
+       {"variant", "m[a=1]"},
+       {"trees", 10},
+       {"fps", 42.0},
+       {"frame_ms_median", 23.8},
+       {"frame_ms_p95", 30.0},
+       {"speedup_vs_polygonal", 2.0}}};
+  const std::string tex = formatSummaryLatex(summarize(records), "run_1", "llvmpipe");
+  EXPECT_NE(tex.find("\\begin{tabular}{llrrrrrr}"), std::string::npos)
+      << tex;  // 2 text + 6 numbers
+  EXPECT_NE(tex.find("oak\\_1 & m[a=1] & 1.50 & 1.00 & 20.00 & 0.500 & 0.100 & 42.0 \\\\"),
+            std::string::npos)
+      << tex;
+  EXPECT_NE(tex.find("\\toprule"), std::string::npos);
+  EXPECT_NE(tex.find("\\bottomrule"), std::string::npos);
+  // Every row has as many cells as the header.
+  size_t header = tex.find("Tree &"), row = tex.find("oak\\_1 &");
+  const auto cells = [&](size_t start) {
+    const std::string line = tex.substr(start, tex.find('\n', start) - start);
+    return std::count(line.begin(), line.end(), '&');
+  };
+  EXPECT_EQ(cells(header), cells(row));
 }
 
 }  // namespace
