@@ -213,7 +213,9 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
       BakedMethod baked = bakeMethod(
           variant, tree, device, config.seed,
           options.outDirectory / "assets" / safeName(treeLabel) / safeName(variant.label),
-          options.saveAssets);
+          // The asset (and its disk_bytes) matters only for the bake record; a resumed run that
+          // already has it re-bakes to render, but does not write the asset again.
+          options.saveAssets && !bakeDone);
       const nlohmann::json params = baked.record["params"];
       spdlog::info("{} on {}: bake {:.2f} s, {:.2f} MB on the GPU", variant.label, treeLabel,
                    baked.record["bake_s"].get<double>(),

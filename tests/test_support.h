@@ -8,8 +8,16 @@
 #include <memory>
 #include <string>
 
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <utility>
+#include <vector>
+
+#include "common/error.h"
 #include "common/gl/context.h"
 #include "common/lsystem.h"
+#include "methods/method.h"
 
 namespace canopy::test {
 
@@ -61,6 +69,29 @@ inline int runCommand(const std::string& command, std::string* errorOutput = nul
   }
   std::filesystem::remove(errorFile);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// Each (key, value) given alone to `method` must be an InputError whose message names the key.
+inline void expectParameterErrorsNameTheKey(
+    const std::string& method, const std::vector<std::pair<std::string, nlohmann::json>>& cases);
+
+}  // namespace canopy::test
+
+#include "methods/method.h"
+
+namespace canopy::test {
+
+inline void expectParameterErrorsNameTheKey(
+    const std::string& method, const std::vector<std::pair<std::string, nlohmann::json>>& cases) {
+  const auto& create = builtinMethods().find(method).create;
+  for (const auto& [key, value] : cases) {
+    try {
+      create({{key, value}}, "test");
+      ADD_FAILURE() << method << ": " << key << " = " << value.dump() << " was accepted";
+    } catch (const InputError& error) {
+      EXPECT_NE(std::string(error.what()).find(key), std::string::npos) << error.what();
+    }
+  }
 }
 
 }  // namespace canopy::test

@@ -74,6 +74,13 @@ glm::vec4 LeafImageSampler::sample(uint32_t texture, bool back, glm::vec2 uv,
                   glm::mix(at(x0, y0 + 1), at(x0 + 1, y0 + 1), fx), fy);
 }
 
+void writeCoverageTexel(uint8_t* out, const glm::vec3& linearSum, int covered, int samples) {
+  if (covered > 0) {
+    for (int c = 0; c < 3; ++c) out[c] = encodeSrgb8(linearSum[c] / float(covered));
+  }
+  out[3] = static_cast<uint8_t>(std::lround(255.0f * float(covered) / float(samples)));
+}
+
 ImageRgba8 captureLeavesOrthographic(const Tree& tree, const LeafImageSampler& sampler,
                                      const std::vector<uint32_t>& leaves,
                                      const Billboard& billboard, int width, int height,
@@ -130,7 +137,6 @@ ImageRgba8 captureLeavesOrthographic(const Tree& tree, const LeafImageSampler& s
     }
   }
   ImageRgba8 image(width, height);
-  const float samples = float(supersample * supersample);
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
       glm::vec3 sum(0.0f);
@@ -143,12 +149,7 @@ ImageRgba8 captureLeavesOrthographic(const Tree& tree, const LeafImageSampler& s
           ++covered;
         }
       }
-      uint8_t* out = image.at(x, y);
-      if (covered > 0) {
-        const glm::vec3 mean = sum / float(covered);
-        for (int c = 0; c < 3; ++c) out[c] = encodeSrgb8(mean[c]);
-      }
-      out[3] = static_cast<uint8_t>(std::lround(255.0f * float(covered) / samples));
+      writeCoverageTexel(image.at(x, y), sum, covered, supersample * supersample);
     }
   }
   return image;

@@ -30,6 +30,11 @@ class LeafImageSampler {
   std::vector<std::vector<Level>> mPyramids;  // [texture * 2 + back][level]
 };
 
+// Writes a texel from `samples` samples of which `covered` hit a leaf, `linearSum` their summed
+// linear colour: RGB the sRGB-encoded mean (left as is when nothing is covered), alpha the
+// coverage.
+void writeCoverageTexel(uint8_t* out, const glm::vec3& linearSum, int covered, int samples);
+
 // What an orthographic camera on the +normal side of `billboard` sees of `leaves` (and only
 // them), over the billboard rectangle, at width × height texels with supersample² samples per
 // texel; each leaf alpha-tested at 0.5, front or back image by the side it turns to the camera.

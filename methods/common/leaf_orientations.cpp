@@ -81,12 +81,7 @@ std::vector<ImageRgba8> buildOrientedLeafImages(const Tree& tree, const LeafImag
             ++covered;
           }
         }
-        uint8_t* out = image.at(x, y);
-        if (covered > 0) {
-          for (int c = 0; c < 3; ++c) out[c] = encodeSrgb8(sum[c] / float(covered));
-        }
-        out[3] = static_cast<uint8_t>(
-            std::lround(255.0f * covered / float(kSupersample * kSupersample)));
+        writeCoverageTexel(image.at(x, y), sum, covered, kSupersample * kSupersample);
       }
     }
     dilateTransparentColors(image, 4);

@@ -307,10 +307,7 @@ class MultilayerIndirect final : public Method {
             ++covered;
           }
         }
-        uint8_t* out = image.at(x, y);
-        if (covered > 0)
-          for (int c = 0; c < 3; ++c) out[c] = encodeSrgb8(sum[c] / float(covered));
-        out[3] = static_cast<uint8_t>(std::lround(255.0f * covered / float(kSamples * kSamples)));
+        writeCoverageTexel(image.at(x, y), sum, covered, kSamples * kSamples);
       }
     }
     return image;

@@ -206,20 +206,11 @@ TEST(BboxHierarchy, BoxImageMatchesTheLeavesInsideTheBox) {
 }
 
 TEST(BboxHierarchy, BadParametersNameTheParameter) {
-  const auto& create = builtinMethods().find("bbox_hierarchy").create;
-  for (const auto& [key, value] :
-       std::vector<std::pair<std::string, nlohmann::json>>{{"texture_size", 0},
+  test::expectParameterErrorsNameTheKey("bbox_hierarchy", {{"texture_size", 0},
                                                            {"volume_ratio", 2.0},
                                                            {"arrangement", "star"},
                                                            {"hierarchy", "octree"},
-                                                           {"transition", -1.0}}) {
-    try {
-      create({{key, value}}, "test");
-      FAIL() << key;
-    } catch (const InputError& error) {
-      EXPECT_NE(std::string(error.what()).find(key), std::string::npos) << error.what();
-    }
-  }
+                                                           {"transition", -1.0}});
 }
 
 }  // namespace

@@ -192,20 +192,11 @@ TEST(MultilayerIndirect, ShaderLodWithAllEntriesEqualsFullEvaluation) {
 }
 
 TEST(MultilayerIndirect, BadParametersNameTheParameter) {
-  const auto& create = builtinMethods().find("multilayer_indirect").create;
-  for (const auto& [key, value] :
-       std::vector<std::pair<std::string, nlohmann::json>>{{"hash_resolution", 0},
-                                                           {"max_layers", 256},
-                                                           {"sprite", "huge"},
-                                                           {"lod_factor", -1.0},
-                                                           {"rotations", 0}}) {
-    try {
-      create({{key, value}}, "test");
-      FAIL() << key;
-    } catch (const InputError& error) {
-      EXPECT_NE(std::string(error.what()).find(key), std::string::npos) << error.what();
-    }
-  }
+  test::expectParameterErrorsNameTheKey("multilayer_indirect", {{"hash_resolution", 0},
+                                                                {"max_layers", 256},
+                                                                {"sprite", "huge"},
+                                                                {"lod_factor", -1.0},
+                                                                {"rotations", 0}});
 }
 
 }  // namespace

@@ -100,20 +100,11 @@ TEST(LeafOrientations, QuarterTurnImagesAreRotationsOfEachOther) {
 }
 
 TEST(SingleLeafIndirect, BadParametersNameTheParameter) {
-  const auto& create = builtinMethods().find("single_leaf_indirect").create;
-  for (const auto& [key, value] :
-       std::vector<std::pair<std::string, nlohmann::json>>{{"cell_size", 0.0},
-                                                           {"rotations", 0},
-                                                           {"tilts", 0},
-                                                           {"leaf_image_size", 2},
-                                                           {"clusters", 0}}) {
-    try {
-      create({{key, value}}, "test");
-      FAIL() << key;
-    } catch (const InputError& error) {
-      EXPECT_NE(std::string(error.what()).find(key), std::string::npos) << error.what();
-    }
-  }
+  test::expectParameterErrorsNameTheKey("single_leaf_indirect", {{"cell_size", 0.0},
+                                                                 {"rotations", 0},
+                                                                 {"tilts", 0},
+                                                                 {"leaf_image_size", 2},
+                                                                 {"clusters", 0}});
 }
 
 }  // namespace
