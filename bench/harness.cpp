@@ -72,8 +72,12 @@ void Harness::beginFrame(const gl::RenderTarget& target) {
 }
 
 ImageRgbaF Harness::renderLinear(Method& method, const Camera& camera) {
+  return renderLinearAt(method, camera, mSettings.width, mSettings.height);
+}
+
+ImageRgbaF Harness::renderLinearAt(Method& method, const Camera& camera, int width, int height) {
   const int s = mSettings.supersample;
-  gl::RenderTarget& target = targetOfSize(mSettings.width * s, mSettings.height * s);
+  gl::RenderTarget& target = targetOfSize(width * s, height * s);
   uploadInstances({Instance{}});
   beginFrame(target);
   method.draw(makeFrame(camera, target.width, target.height, mInstances.id()),
@@ -90,11 +94,15 @@ ImageRgbaF Harness::renderLinear(Method& method, const Camera& camera) {
   return boxDownsample(full, s);
 }
 
-ImageRgba8 Harness::render(Method& method, const Camera& camera) {
+ImageRgba8 Harness::display(const ImageRgbaF& linear) const {
   const glm::vec3 background(srgbToLinear(mSettings.background.r),
                              srgbToLinear(mSettings.background.g),
                              srgbToLinear(mSettings.background.b));
-  return compositeToSrgb8(renderLinear(method, camera), background);
+  return compositeToSrgb8(linear, background);
+}
+
+ImageRgba8 Harness::render(Method& method, const Camera& camera) {
+  return display(renderLinear(method, camera));
 }
 
 FrameTimes summarizeFrameTimes(std::vector<double> milliseconds) {
@@ -149,10 +157,7 @@ ImageRgba8 Harness::renderForestFrame(Method& method, const std::vector<Instance
   g.ReadPixels(0, 0, width, height, GL_RGBA, GL_FLOAT, image.pixels.data());
   g.BindFramebuffer(GL_FRAMEBUFFER, 0);
   flipRows(image);
-  const glm::vec3 background(srgbToLinear(mSettings.background.r),
-                             srgbToLinear(mSettings.background.g),
-                             srgbToLinear(mSettings.background.b));
-  return compositeToSrgb8(image, background);
+  return display(image);
 }
 
 }  // namespace canopy

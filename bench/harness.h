@@ -40,6 +40,11 @@ class Harness {
   // One tree at the origin seen by `camera`: the supersampled render box-filtered to the
   // evaluation resolution (linear, premultiplied; alpha is coverage).
   ImageRgbaF renderLinear(Method& method, const Camera& camera);
+  // The same at another resolution (still supersampled by settings().supersample).
+  ImageRgbaF renderLinearAt(Method& method, const Camera& camera, int width, int height);
+  // A linear premultiplied image composited over the background, 8-bit sRGB (alpha keeps
+  // coverage): how every scored image is made, rendered or captured.
+  ImageRgba8 display(const ImageRgbaF& linear) const;
   // The same composited over the background and encoded to 8-bit sRGB (alpha keeps coverage).
   ImageRgba8 render(Method& method, const Camera& camera);
 

@@ -123,10 +123,14 @@ std::vector<SummaryRow> summarize(const std::vector<nlohmann::json>& records) {
       acc.ssim.add(record.value("ssim", std::nan("")));
       acc.coverage.add(record.value("coverage_error", std::nan("")));
       acc.byDistance[record.value("distance", 0.0)].add(record.value("psnr", std::nan("")));
-      acc.byElevation[record.value("elevation", 0.0)].add(record.value("psnr", std::nan("")));
+      // Capture views have no elevation (the capture's up axis is its own).
+      if (record.contains("elevation"))
+        acc.byElevation[record["elevation"].get<double>()].add(record.value("psnr", std::nan("")));
       ++row.views;
     } else if (kind == "forest") {
       row.forests.push_back(record);
+    } else if (kind == "skip") {
+      row.skipped = record.value("reason", "skipped");
     }
   }
   for (size_t i = 0; i < rows.size(); ++i) {
@@ -213,6 +217,15 @@ std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std
                        number(bake ? mb((*bake)["disk_bytes"]) : std::nan(""), 2),
                        number(row.psnr, 2), number(row.ssim, 3), number(row.coverageError, 4));
     for (double d : distances) out += " " + number(lookup(row.psnrByDistance, d), 2) + " |";
+    out += "\n";
+  }
+  bool anySkipped = false;
+  for (const SummaryRow& row : rows) anySkipped = anySkipped || !row.skipped.empty();
+  if (anySkipped) {
+    out += "\nSkipped: ";
+    for (const SummaryRow& row : rows)
+      if (!row.skipped.empty())
+        out += fmt::format("{} on {} ({}); ", row.variant, row.tree, row.skipped);
     out += "\n";
   }
   if (!elevations.empty()) {

@@ -20,6 +20,7 @@ struct SummaryRow {
   std::vector<std::pair<double, double>> psnrByDistance;   // (distance, mean PSNR)
   std::vector<std::pair<double, double>> psnrByElevation;  // (elevation, mean PSNR)
   std::vector<nlohmann::json> forests;                     // kind:"forest" records by size
+  std::string skipped;  // why the method did not run on this tree (kind:"skip"), else empty
 };
 
 std::vector<SummaryRow> summarize(const std::vector<nlohmann::json>& records);

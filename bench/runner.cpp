@@ -13,6 +13,7 @@
 #include "bench/report.h"
 #include "bench/results_store.h"
 #include "common/atomic_file.h"
+#include "common/captures.h"
 #include "common/image.h"
 #include "common/metrics.h"
 #include "common/progress.h"
@@ -34,6 +35,47 @@ std::string viewKey(const ViewPose& pose) {
   return fmt::format("d{:g}_e{:g}_a{:g}", pose.distance, pose.elevation, pose.azimuth);
 }
 
+// A view every method of a tree is scored on: an orbit pose around a mesh tree, or a held-out
+// test view of a capture (whose reference is the photograph itself).
+struct EvalView {
+  std::string key;
+  Camera camera;
+  int width = 0, height = 0;
+  nlohmann::json fields;                 // distance/elevation/azimuth or capture view name
+  const ImageRgbaF* captured = nullptr;  // the reference of a capture view
+};
+
+std::vector<EvalView> evaluationViews(const Tree& tree, const ExperimentConfig& config) {
+  std::vector<EvalView> views;
+  const RenderSettings& render = config.views.render;
+  if (tree.captures) {
+    const float radius = tree.boundingSphereRadius();
+    for (const CapturedView& v : tree.captures->test) {
+      const std::string stem = std::filesystem::path(v.name).stem().string();
+      const double distance =
+          std::round(10.0 * glm::length(v.camera.position - tree.bounds.center()) / radius) / 10.0;
+      views.push_back({"test_" + stem,
+                       v.camera,
+                       v.image.width,
+                       v.image.height,
+                       {{"capture_view", v.name}, {"distance", distance}},
+                       &v.image});
+    }
+    return views;
+  }
+  for (const ViewPose& pose :
+       makeViewRings(config.views.distances, config.views.elevations, config.views.azimuths)) {
+    views.push_back(
+        {viewKey(pose),
+         orbitCamera(tree.bounds, pose, render.fovYDegrees),
+         render.width,
+         render.height,
+         {{"distance", pose.distance}, {"elevation", pose.elevation}, {"azimuth", pose.azimuth}},
+         nullptr});
+  }
+  return views;
+}
+
 struct BakedMethod {
   std::unique_ptr<Method> method;
   nlohmann::json record;  // the kind:"bake" record
@@ -41,13 +83,15 @@ struct BakedMethod {
 
 // Bakes and uploads one method under its own ledger owner and measures what the record needs.
 BakedMethod bakeMethod(const MethodVariant& variant, const Tree& tree, gl::Device& device,
-                       uint64_t seed, const std::filesystem::path& assetFolder, bool saveAsset) {
+                       uint64_t seed, const std::filesystem::path& assetFolder, bool saveAsset,
+                       const std::function<ImageRgbaF(const Camera&, int, int)>& photograph = {}) {
   BakedMethod baked;
   baked.method =
       builtinMethods().find(variant.method).create(variant.params, "methods." + variant.label);
   const bool peakReset = resetPeakRss();
   BakeContext context;
   context.seed = seed;
+  context.photograph = photograph;
   const auto start = Clock::now();
   baked.method->bake(tree, context);
   const double bakeSeconds = secondsSince(start);
@@ -125,8 +169,6 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
   gl::Ledger ledger;
   gl::Device device(ledger);
   Harness harness(device, config.views.render);
-  const std::vector<ViewPose> poses =
-      makeViewRings(config.views.distances, config.views.elevations, config.views.azimuths);
   const MethodVariant referenceVariant{"polygonal", nlohmann::json::object(), "polygonal"};
 
   for (size_t t = 0; t < config.trees.size(); ++t) {
@@ -168,21 +210,32 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
       if (!reference)
         reference = bakeMethod(referenceVariant, tree, device, config.seed, {}, false);
     };
-    const auto referenceImage = [&](const ViewPose& pose) -> const ImageRgba8& {
-      ensureReference();
-      auto [it, inserted] = referenceImages.try_emplace(viewKey(pose));
+    const std::vector<EvalView> views = evaluationViews(tree, config);
+    const auto referenceImage = [&](const EvalView& view) -> const ImageRgba8& {
+      auto [it, inserted] = referenceImages.try_emplace(view.key);
       if (inserted) {
-        it->second = harness.render(
-            *reference->method, orbitCamera(tree.bounds, pose, config.views.render.fovYDegrees));
+        if (view.captured) {
+          it->second = harness.display(*view.captured);
+        } else {
+          ensureReference();
+          it->second = harness.display(
+              harness.renderLinearAt(*reference->method, view.camera, view.width, view.height));
+        }
         if (options.saveImages) {
           writePng(options.outDirectory / "images" / safeName(treeLabel) / "reference" /
-                       (viewKey(pose) + ".png"),
+                       (view.key + ".png"),
                    withOpaqueAlpha(it->second));
         }
       }
       return it->second;
     };
-    const auto referenceTime = [&](int size) -> const FrameTimes& {
+    // Image-based methods photograph a mesh tree through the reference, as a camera would.
+    const auto photograph = [&](const Camera& camera, int width, int height) {
+      ensureReference();
+      return harness.renderLinearAt(*reference->method, camera, width, height);
+    };
+    const auto referenceTime = [&](int size) -> const FrameTimes* {
+      if (tree.captures) return nullptr;  // no mesh: nothing to time against
       ensureReference();
       auto [it, inserted] = referenceTimes.try_emplace(size);
       if (inserted) {
@@ -190,15 +243,28 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
             harness.timeForest(*reference->method, forest(size), tree.bounds, config.forests.frames,
                                config.forests.warmup, config.forests.width, config.forests.height);
       }
-      return it->second;
+      return &it->second;
     };
 
     for (size_t v : mine) {
       const MethodVariant& variant = config.variants[v];
       const std::string prefix = treeLabel + "|" + variant.label + "|";
-      std::vector<ViewPose> pendingViews;
-      for (const ViewPose& pose : poses)
-        if (!store.has(prefix + "view|" + viewKey(pose))) pendingViews.push_back(pose);
+      const nlohmann::json common = {
+          {"tree", treeLabel}, {"method", variant.method}, {"variant", variant.label}};
+      if (tree.captures && builtinMethods().find(variant.method).needsMesh) {
+        if (!store.has(prefix + "skip")) {
+          nlohmann::json record = common;
+          record.update({{"kind", "skip"},
+                         {"reason", "needs a mesh; the tree is a capture folder (images only)"}});
+          store.append(record, prefix + "skip");
+        }
+        spdlog::info("{} on {}: skipped (needs a mesh; the tree is a capture)", variant.label,
+                     treeLabel);
+        continue;
+      }
+      std::vector<const EvalView*> pendingViews;
+      for (const EvalView& view : views)
+        if (!store.has(prefix + "view|" + view.key)) pendingViews.push_back(&view);
       std::vector<int> pendingForests;
       for (int size : config.forests.sizes)
         if (!store.has(prefix + fmt::format("forest|{}", size))) pendingForests.push_back(size);
@@ -207,15 +273,13 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
         spdlog::info("{} on {}: already complete, skipped", variant.label, treeLabel);
         continue;
       }
-      const nlohmann::json common = {
-          {"tree", treeLabel}, {"method", variant.method}, {"variant", variant.label}};
       spdlog::info("{} on {}: baking", variant.label, treeLabel);
       BakedMethod baked = bakeMethod(
           variant, tree, device, config.seed,
           options.outDirectory / "assets" / safeName(treeLabel) / safeName(variant.label),
           // The asset (and its disk_bytes) matters only for the bake record; a resumed run that
           // already has it re-bakes to render, but does not write the asset again.
-          options.saveAssets && !bakeDone);
+          options.saveAssets && !bakeDone, photograph);
       const nlohmann::json params = baked.record["params"];
       spdlog::info("{} on {}: bake {:.2f} s, {:.2f} MB on the GPU", variant.label, treeLabel,
                    baked.record["bake_s"].get<double>(),
@@ -229,30 +293,28 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
       {
         ProgressBar progress(fmt::format("{} {} views", treeLabel, variant.label),
                              pendingViews.size());
-        for (const ViewPose& pose : pendingViews) {
-          const ImageRgba8& expected = referenceImage(pose);
-          const ImageRgba8 image = harness.render(
-              *baked.method, orbitCamera(tree.bounds, pose, config.views.render.fovYDegrees));
+        for (const EvalView* view : pendingViews) {
+          const ImageRgba8& expected = referenceImage(*view);
+          const ImageRgba8 image = harness.display(
+              harness.renderLinearAt(*baked.method, view->camera, view->width, view->height));
           const ImageMetrics metrics = compareImages(expected, image);
           if (options.saveImages) {
             writePng(options.outDirectory / "images" / safeName(treeLabel) /
-                         safeName(variant.label) / (viewKey(pose) + ".png"),
+                         safeName(variant.label) / (view->key + ".png"),
                      withOpaqueAlpha(image));
           }
           nlohmann::json record = common;
+          record.update(view->fields);
           record.update(
               {{"kind", "view"},
                {"params", params},
-               {"distance", pose.distance},
-               {"elevation", pose.elevation},
-               {"azimuth", pose.azimuth},
                {"psnr", metrics.psnr},
                {"psnr_frame", metrics.psnrFrame},
                {"ssim", metrics.ssim},
                {"coverage_error", metrics.coverageError},
                {"union_pixels", metrics.unionPixels},
                {"shading", config.views.render.shading == Shading::kLit ? "lit" : "unlit"}});
-          store.append(record, prefix + "view|" + viewKey(pose));
+          store.append(record, prefix + "view|" + view->key);
           progress.advance();
         }
       }
@@ -263,9 +325,9 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
           // Reference first, then the method, back to back in this process: the ratio is from one
           // run.
           const bool isReference = variant.method == "polygonal" && variant.params.empty();
-          const FrameTimes& polygonal = referenceTime(size);
+          const FrameTimes* polygonal = referenceTime(size);
           const FrameTimes times =
-              isReference ? polygonal
+              isReference ? *polygonal
                           : harness.timeForest(*baked.method, forest(size), tree.bounds,
                                                config.forests.frames, config.forests.warmup,
                                                config.forests.width, config.forests.height);
@@ -280,8 +342,11 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
                          {"frame_ms_p95", times.p95Ms},
                          {"frame_ms_mean", times.meanMs},
                          {"fps", 1000.0 / times.medianMs},
-                         {"polygonal_frame_ms_median", polygonal.medianMs},
-                         {"speedup_vs_polygonal", polygonal.medianMs / times.medianMs},
+                         {"polygonal_frame_ms_median",
+                          polygonal ? nlohmann::json(polygonal->medianMs) : nlohmann::json()},
+                         {"speedup_vs_polygonal",
+                          polygonal ? nlohmann::json(polygonal->medianMs / times.medianMs)
+                                    : nlohmann::json()},
                          {"gl_renderer", renderer}});
           store.append(record, prefix + fmt::format("forest|{}", size));
           progress.advance();

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -86,6 +87,8 @@ struct BranchNode {
   uint32_t subtreeLeafEnd = 0;
 };
 
+struct CaptureSet;
+
 struct Tree {
   std::string name;
   WoodMesh wood;
@@ -95,6 +98,9 @@ struct Tree {
   std::vector<LeafTexture> leafTextures;
   std::vector<BranchNode> branches;  // empty when the source has no hierarchy
   Aabb bounds;
+  // Set for a tree known only from photographs (a capture folder): no leaves, no wood, and
+  // `bounds` the visual hull of its training views.
+  std::shared_ptr<const CaptureSet> captures;
 
   glm::vec3 boundingSphereCenter() const { return bounds.center(); }
   float boundingSphereRadius() const;

@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/captures.h"
 #include "common/lsystem.h"
 
 namespace canopy {
@@ -11,12 +12,15 @@ namespace canopy {
 std::string TreeSpec::label() const {
   if (!name.empty()) return name;
   if (kind == Kind::kFile) return std::filesystem::path(file.path).stem().string();
+  if (kind == Kind::kCaptures)
+    return std::filesystem::path(captures).lexically_normal().filename().string();
   std::string label = preset + "_s" + std::to_string(seed);
   if (leaves > 0) label += "_l" + std::to_string(leaves);
   return label;
 }
 
 nlohmann::json TreeSpec::source() const {
+  if (kind == Kind::kCaptures) return {{"captures", captures}};
   if (kind == Kind::kFile) {
     return {{"file", file.path}, {"leaf_materials", file.leafMaterials}, {"up", file.up}};
   }
@@ -28,17 +32,19 @@ nlohmann::json TreeSpec::source() const {
 TreeSpec parseTreeSpec(ConfigObject& config, const std::string& baseDirectory) {
   TreeSpec spec;
   spec.name = config.get<std::string>("name", "");
-  if (config.has("captures")) {
-    throwInputError(
-        "config {}: capture folders need an image-based method; no registered method "
-        "reconstructs from images yet",
-        config.keyPath("captures"));
+  const bool hasPreset = config.has("preset"), hasFile = config.has("file"),
+             hasCaptures = config.has("captures");
+  if (int(hasPreset) + int(hasFile) + int(hasCaptures) != 1) {
+    throwInputError("config {}: a tree needs exactly one of \"preset\", \"file\" or \"captures\"",
+                    config.path());
   }
-  const bool hasPreset = config.has("preset"), hasFile = config.has("file");
-  if (hasPreset == hasFile) {
-    throwInputError("config {}: a tree needs exactly one of \"preset\" or \"file\"", config.path());
-  }
-  if (hasPreset) {
+  if (hasCaptures) {
+    spec.kind = TreeSpec::Kind::kCaptures;
+    std::filesystem::path path = config.get<std::string>("captures");
+    if (path.is_relative() && !baseDirectory.empty() && !std::filesystem::exists(path))
+      path = std::filesystem::path(baseDirectory) / path;
+    spec.captures = path.string();
+  } else if (hasPreset) {
     spec.kind = TreeSpec::Kind::kPreset;
     spec.preset = config.get<std::string>("preset");
     treePreset(spec.preset);  // validates the name
@@ -69,7 +75,11 @@ TreeSpec parseTreeSpec(ConfigObject& config, const std::string& baseDirectory) {
 
 Tree loadTree(const TreeSpec& spec) {
   Tree tree;
-  if (spec.kind == TreeSpec::Kind::kPreset) {
+  if (spec.kind == TreeSpec::Kind::kCaptures) {
+    auto captures = std::make_shared<CaptureSet>(readNerfCaptures(spec.captures));
+    tree.bounds = captures->bounds;
+    tree.captures = std::move(captures);
+  } else if (spec.kind == TreeSpec::Kind::kPreset) {
     LSystemTreeParams params = treePreset(spec.preset);
     if (spec.leaves > 0) params.leaves = spec.leaves;
     tree = generateTree(params, spec.seed);

@@ -15,13 +15,15 @@ namespace canopy {
 // Where a tree comes from, as a config names it:
 //   {"preset": "broadleaf", "seed": 1, "leaves": 20000}
 //   {"file": "assets/oak.glb", "leaf_materials": ["Leaves"], "up": "y"}
+//   {"captures": "captures/oak"}  (a NeRF-layout folder of calibrated RGBA photographs)
 struct TreeSpec {
-  enum class Kind { kPreset, kFile };
+  enum class Kind { kPreset, kFile, kCaptures };
   Kind kind = Kind::kPreset;
   std::string preset;    // kPreset: broadleaf | shrub | sparse
   uint64_t seed = 1;     // kPreset: L-system seed
   int leaves = 0;        // kPreset: leaf count override (0: the preset's)
   TreeFileOptions file;  // kFile
+  std::string captures;  // kCaptures: the folder
   std::string name;      // the label in results (default: preset or file stem)
 
   // A label unique within an experiment: "broadleaf_s1", "broadleaf_s1_l100000", "oak".

@@ -29,6 +29,10 @@ class ProgressBar;
 struct BakeContext {
   uint64_t seed = 1;                // every random choice of a bake derives from it
   ProgressBar* progress = nullptr;  // optional; methods report long loops through it
+  // Renders the tree's reference image (the polygonal method) from `camera` at width × height:
+  // linear premultiplied RGBA, alpha the supersampled coverage. The harness sets it; image-based
+  // methods take their "photographs" of a mesh tree with it.
+  std::function<ImageRgbaF(const Camera& camera, int width, int height)> photograph;
 };
 
 enum class Shading { kUnlit, kLit };
@@ -114,6 +118,7 @@ struct MethodInfo {
   std::string name;         // the config's "method" value
   std::string description;  // one line, for --list-methods and docs
   MethodFactory create;
+  bool needsMesh = true;  // false: bakes from images alone, so it also runs on capture folders
 };
 
 class MethodRegistry {
@@ -129,12 +134,14 @@ class MethodRegistry {
 // Registers MethodType, built from a Params struct read from the config (readParams: typed,
 // range-checked, unknown keys rejected). Each method's register function calls it once.
 template <typename MethodType, typename Params>
-void addMethod(MethodRegistry& registry, const std::string& name, std::string description) {
+void addMethod(MethodRegistry& registry, const std::string& name, std::string description,
+               bool needsMesh = true) {
   registry.add(
       {name, std::move(description),
        [name](const nlohmann::json& params, const std::string& path) -> std::unique_ptr<Method> {
          return std::make_unique<MethodType>(readParams<Params>(params, path, name));
-       }});
+       },
+       needsMesh});
 }
 
 // The registry of every built-in method, filled by registry.cpp (one explicit call each).

@@ -6,6 +6,7 @@
 #include "methods/multilayer_indirect/multilayer_indirect.h"
 #include "methods/polygonal/polygonal.h"
 #include "methods/single_leaf_indirect/single_leaf_indirect.h"
+#include "methods/volumetric_opacity/volumetric_opacity.h"
 
 namespace canopy {
 
@@ -40,6 +41,7 @@ const MethodRegistry& builtinMethods() {
     registerSingleLeafIndirect(r);
     registerMultilayerIndirect(r);
     registerBboxHierarchy(r);
+    registerVolumetricOpacity(r);
     return r;
   }();
   return registry;

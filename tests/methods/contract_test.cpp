@@ -26,11 +26,30 @@ class MethodContract : public testing::TestWithParam<std::string> {
     return builtinMethods().find(GetParam()).create(params, "test");
   }
 
-  std::unique_ptr<Method> bakeAndUpload(const Tree& tree, const std::string& owner,
-                                        const nlohmann::json& params = nlohmann::json::object()) {
-    auto method = create(params);
+  // Parameters that keep a method's bake within a test's budget on the small tree; the contract
+  // is the same at any size.
+  static nlohmann::json quickParams(const std::string& method) {
+    if (method == "volumetric_opacity")
+      return {{"views", 8}, {"capture_resolution", 96}, {"level", 3}, {"max_iterations", 4}};
+    return nlohmann::json::object();
+  }
+
+  std::unique_ptr<Method> bakeAndUpload(const Tree& tree, const std::string& owner) {
+    auto method = create(quickParams(GetParam()));
     BakeContext context;
     context.seed = 11;
+    // Image-based methods photograph the tree through the reference, as the runner does.
+    context.photograph = [&](const Camera& camera, int width, int height) {
+      if (!mPhotographer) {
+        mPhotographer =
+            builtinMethods().find("polygonal").create(nlohmann::json::object(), "reference");
+        BakeContext referenceContext;
+        mPhotographer->bake(tree, referenceContext);
+        gl::Device::OwnerScope scope(*mDevice, "photographer");
+        mPhotographer->upload(*mDevice);
+      }
+      return mHarness->renderLinearAt(*mPhotographer, camera, width, height);
+    };
     method->bake(tree, context);
     gl::Device::OwnerScope scope(*mDevice, owner);
     method->upload(*mDevice);
@@ -51,6 +70,7 @@ class MethodContract : public testing::TestWithParam<std::string> {
   gl::Ledger mLedger;
   std::unique_ptr<gl::Device> mDevice;
   std::unique_ptr<Harness> mHarness;
+  std::unique_ptr<Method> mPhotographer;  // the polygonal tree that image-based methods photograph
 };
 
 // The reference's coverage of the same view, for comparison.

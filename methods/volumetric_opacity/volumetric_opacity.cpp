@@ -1,0 +1,403 @@
+#include "methods/volumetric_opacity/volumetric_opacity.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_inverse.hpp>
+
+#include "common/captures.h"
+#include "common/progress.h"
+#include "methods/volumetric_opacity/opacity_grid.h"
+#include "methods/volumetric_opacity/opacity_solver.h"
+#include "methods/volumetric_opacity/view_textures.h"
+
+namespace canopy {
+namespace {
+
+struct VolumetricParams {
+  int views = 22;                // rendered photographs of a mesh tree (§4, §7: 18–22)
+  int captureResolution = 512;   // pixels per side of each rendered photograph
+  float captureDistance = 3.0f;  // camera distance from the tree's centre in bounding radii
+  int level = 4;                 // grid subdivision levels, 3^level cells per side (§7: 4–5)
+  int texels = 8;                // M: billboard textures are M × M (§6: 4 or 8)
+  float cutoff = 0.94f;          // transparency cutoff threshold (§5; §7 uses 0.9 and 0.94)
+  std::string solver = "projection";  // "projection" (§5, Fig. 5) or "ceres" (ablation)
+  int maxIterations = 10;             // solver iterations at most (§5: 3–4 suffice)
+  float convergence = 0.01f;          // stop when no transparency changes by more in an iteration
+  int rayStride = 1;                  // one ray per stride² pixels (1: every pixel, as §5)
+  bool inpaint = true;            // refill pixels taken by a billboard from their neighbours (§6)
+  bool pack = true;               // pack two RGB textures with disjoint alphas into one slot (§6)
+  float foregroundAlpha = 0.02f;  // alpha above which a pixel belongs to the visual hull
+
+  template <class Visitor>
+  void visit(Visitor& v) {
+    v("views", views, 2, 200);
+    v("capture_resolution", captureResolution, 32, 4096);
+    v("capture_distance", captureDistance, 1.2f, 100.0f);
+    v("level", level, 1, 5);
+    v("texels", texels, 2, 8);
+    v("cutoff", cutoff, 0.5f, 1.0f);
+    v("solver", solver, {"projection", "ceres"});
+    v("max_iterations", maxIterations, 1, 200);
+    v("convergence", convergence, 0.0f, 1.0f);
+    v("ray_stride", rayStride, 1, 16);
+    v("inpaint", inpaint);
+    v("pack", pack);
+    v("foreground_alpha", foregroundAlpha, 0.0f, 0.5f);
+  }
+};
+
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// The photographs of a mesh tree (§4): cameras on three rings around the tree, most of them low
+// as a photographer walking around it would take them, looking at the bounding-sphere centre.
+std::vector<Camera> captureCameras(const Aabb& bounds, int count, float distance) {
+  const int high = std::max(1, int(std::lround(count * 2.0 / 22.0)));
+  const int middle = std::max(1, int(std::lround(count * 6.0 / 22.0)));
+  const int low = std::max(1, count - high - middle);
+  std::vector<Camera> cameras;
+  const std::array<std::pair<float, int>, 3> rings{{{5.0f, low}, {35.0f, middle}, {65.0f, high}}};
+  for (const auto& [elevation, n] : rings) {
+    for (int i = 0; i < n && int(cameras.size()) < count; ++i) {
+      // Offset from the evaluation's azimuths (multiples of 90°) so no photograph is a test view.
+      const float azimuth = 5.0f + 360.0f * float(i) / float(n) + elevation;
+      cameras.push_back(orbitCamera(bounds, {distance, elevation, azimuth}, 40.0f));
+    }
+  }
+  return cameras;
+}
+
+// 26 directions (faces, edges and corners of a cube): each has the cells sorted back to front
+// for a viewer far along it; a draw uses the one nearest its viewing direction.
+std::vector<glm::vec3> orderDirections() {
+  std::vector<glm::vec3> directions;
+  for (int z = -1; z <= 1; ++z)
+    for (int y = -1; y <= 1; ++y)
+      for (int x = -1; x <= 1; ++x)
+        if (x || y || z) directions.push_back(glm::normalize(glm::vec3(x, y, z)));
+  return directions;
+}
+
+class VolumetricOpacity final : public Method {
+ public:
+  explicit VolumetricOpacity(VolumetricParams params) : mParams(std::move(params)) {}
+
+  void bake(const Tree& tree, BakeContext& ctx) override {
+    mReport = nlohmann::json::object();
+    // §4: the input views — the capture's training views, or photographs of the mesh.
+    auto start = Clock::now();
+    std::vector<CapturedView> rendered;
+    const std::vector<CapturedView>* inputs = nullptr;
+    if (tree.captures) {
+      inputs = &tree.captures->train;
+      mReport["input"] = "captures";
+    } else {
+      if (!ctx.photograph)
+        throw std::logic_error("volumetric_opacity: bake needs BakeContext::photograph");
+      for (const Camera& camera :
+           captureCameras(tree.bounds, mParams.views, mParams.captureDistance)) {
+        rendered.push_back(
+            {camera, ctx.photograph(camera, mParams.captureResolution, mParams.captureResolution),
+             fmt::format("view {}", rendered.size())});
+      }
+      inputs = &rendered;
+      mReport["input"] = "rendered";
+    }
+    mReport["input_views"] = inputs->size();
+    mReport["capture_s"] = secondsSince(start);
+    const std::vector<OpacityView> views = prepareViews(*inputs, mParams.foregroundAlpha);
+    mCameraDirections.clear();
+    const Aabb& bounds = tree.captures ? tree.captures->bounds : tree.bounds;
+    for (const CapturedView& v : *inputs)
+      mCameraDirections.push_back(glm::normalize(v.camera.position - bounds.center()));
+
+    // §7 grid and §5 initialisation and estimation.
+    start = Clock::now();
+    mGrid = buildOpacityGrid(enclosingCube(bounds), mParams.level, views, mParams.foregroundAlpha);
+    mReport["cells_per_level"] = mGrid.nonEmptyPerLevel;
+    mReport["grid_s"] = secondsSince(start);
+    spdlog::info("volumetric_opacity: {} cells inside the visual hull at level {} ({:.2f} s)",
+                 mGrid.cells.size(), mParams.level, mReport["grid_s"].get<double>());
+    SolverSettings solver{mParams.maxIterations, mParams.convergence, mParams.cutoff,
+                          mParams.rayStride};
+    const double initialResidual = transparencyResidual(mGrid, views, mParams.rayStride);
+    const SolverResult solved = mParams.solver == "ceres" ? solveWithCeres(mGrid, views, solver)
+                                                          : solveByProjection(mGrid, views, solver);
+    nlohmann::json iterations = nlohmann::json::array();
+    for (const SolverIteration& it : solved.iterations)
+      iterations.push_back({{"rms_transparency", it.rmsTransparency},
+                            {"rms_log", it.rmsLog},
+                            {"max_change", it.maxChange},
+                            {"active_cells", it.activeCells},
+                            {"seconds", it.seconds}});
+    mGrid.removeTransparentCells(1.0f);
+    mReport["estimation"] = {{"solver", solved.solver},
+                             {"rays", solved.rays},
+                             {"initial_rms_transparency", initialResidual},
+                             {"final_rms_transparency", solved.finalRmsTransparency},
+                             {"converged", solved.converged},
+                             {"iterations", iterations},
+                             {"seconds", solved.seconds}};
+    mReport["cells"] = mGrid.cells.size();
+    spdlog::info("volumetric_opacity: {} cells after the cutoff {}; residual {:.4f} → {:.4f}",
+                 mGrid.cells.size(), mParams.cutoff, initialResidual, solved.finalRmsTransparency);
+
+    // §6 view-dependent textures, then packing.
+    start = Clock::now();
+    const ViewTextures textures =
+        generateViewTextures(mGrid, views, {mParams.texels, mParams.inpaint, 2});
+    const double texturesSeconds = secondsSince(start);
+    start = Clock::now();
+    if (mParams.pack) {
+      mTextures = packTextures(textures);
+    } else {
+      mTextures = {textures.texels, textures.tile, textures.alpha, {}, textures.rgb};
+      mTextures.slotOfTile.resize(textures.tileCount());
+      std::iota(mTextures.slotOfTile.begin(), mTextures.slotOfTile.end(), 0u);
+    }
+    const double packingSeconds = secondsSince(start);
+    const uint64_t texelsPerTexture = uint64_t(mParams.texels) * mParams.texels;
+    mReport["textures"] = {
+        {"texels", mParams.texels},
+        {"all_textures", uint64_t(textures.views) * textures.cells},
+        {"non_empty_textures", textures.tileCount()},
+        {"rgba_bytes_all", uint64_t(textures.views) * textures.cells * texelsPerTexture * 4},
+        {"rgba_bytes_non_empty", textures.tileCount() * texelsPerTexture * 4},
+        {"rgb_slots", mTextures.slotCount()},
+        {"packed_bytes", mTextures.texelBytes()},
+        {"generation_s", texturesSeconds},
+        {"packing_s", packingSeconds}};
+    spdlog::info(
+        "volumetric_opacity: {} non-empty textures of {} ({:.1f} MB RGBA), packed into {} RGB "
+        "slots: {:.1f} MB; textures {:.2f} s, packing {:.2f} s",
+        textures.tileCount(), uint64_t(textures.views) * textures.cells,
+        double(textures.tileCount() * texelsPerTexture * 4) / 1e6, mTextures.slotCount(),
+        double(mTextures.texelBytes()) / 1e6, texturesSeconds, packingSeconds);
+    buildOrders();
+  }
+
+  void upload(gl::Device& device) override {
+    using gl::MemoryCategory;
+    std::vector<uint32_t> coords(mGrid.cells.size());
+    for (size_t i = 0; i < coords.size(); ++i) {
+      const glm::ivec3 c = mGrid.cells[i];
+      coords[i] = uint32_t(c.x) | uint32_t(c.y) << 10 | uint32_t(c.z) << 20;
+    }
+    const auto storage = [&](MemoryCategory category, const auto& data, const char* label) {
+      // Storage buffers may not be empty; one word stands in for nothing.
+      const size_t bytes = std::max<size_t>(data.size() * sizeof(data[0]), 4);
+      std::vector<uint8_t> padded(bytes + (4 - bytes % 4) % 4, 0);
+      if (!data.empty()) std::memcpy(padded.data(), data.data(), data.size() * sizeof(data[0]));
+      return device.createBuffer(category, GL_SHADER_STORAGE_BUFFER, padded, label);
+    };
+    mBuffers[0] = storage(MemoryCategory::kGeometry, coords, "cell coordinates");
+    mBuffers[1] = storage(MemoryCategory::kGeometry, mOrders, "back-to-front orders");
+    mBuffers[2] = storage(MemoryCategory::kOther, mTextures.tile, "texture of each cell and view");
+    mBuffers[3] = storage(MemoryCategory::kOther, mTextures.slotOfTile, "RGB slot of each texture");
+    mBuffers[4] = storage(MemoryCategory::kTexture, mTextures.alpha, "billboard alphas");
+    mBuffers[5] = storage(MemoryCategory::kTexture, mTextures.slotRgb, "billboard colours");
+    mProgram =
+        device.createProgram({gl::embeddedShader("methods/volumetric_opacity/billboards.vert"),
+                              gl::embeddedShader("methods/volumetric_opacity/billboards.frag")});
+    GLuint vao = 0;  // attribute-less draws still need a vertex array bound in a core context
+    gl::api().GenVertexArrays(1, &vao);
+    mVao = gl::VertexArray{gl::GlName<gl::deleteVertexArrayName>(vao)};
+  }
+
+  void draw(const FrameContext& frame, std::span<const Instance> instances) override {
+    if (instances.empty() || mGrid.cells.empty()) return;
+    const gl::Api& g = gl::api();
+    mProgram.use();
+    mProgram.set("uView", frame.view);
+    mProgram.set("uProjection", frame.projection);
+    mProgram.set("uRootMin", mGrid.root.min);
+    mProgram.set("uCellSize", mGrid.cellSize);
+    mProgram.set("uCells", int(mGrid.cells.size()));
+    mProgram.set("uTexels", mTextures.texels);
+    const glm::vec3 right(frame.view[0][0], frame.view[1][0], frame.view[2][0]);
+    const glm::vec3 up(frame.view[0][1], frame.view[1][1], frame.view[2][1]);
+    mProgram.set("uRight", right);
+    mProgram.set("uUp", up);
+    for (GLuint b = 0; b < mBuffers.size(); ++b)
+      g.BindBufferBase(GL_SHADER_STORAGE_BUFFER, b, mBuffers[b].id());
+    g.BindVertexArray(mVao.id());
+    // Over operator on premultiplied colour, back to front, no depth writes (§6).
+    g.Enable(GL_BLEND);
+    g.BlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+    g.DepthMask(GL_FALSE);
+    // Trees far to near so the forest composites correctly too.
+    std::vector<size_t> order(instances.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::vector<float> distance(instances.size());
+    for (size_t i = 0; i < instances.size(); ++i)
+      distance[i] = glm::length(instances[i].position - frame.cameraPosition);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return distance[a] > distance[b]; });
+    const glm::vec3 center = mGrid.root.center();
+    for (size_t i : order) {
+      const glm::mat4 model = instances[i].modelMatrix();
+      const glm::mat3 toModel = glm::inverse(glm::mat3(model));
+      const glm::vec3 viewer =
+          glm::vec3(glm::affineInverse(model) * glm::vec4(frame.cameraPosition, 1));
+      const glm::vec3 direction = glm::normalize(viewer - center);
+      const auto [camera0, camera1, weight0] = closestCameras(direction);
+      const float scale = glm::length(glm::vec3(model[0]));
+      const glm::vec2 half =
+          scale * billboardHalfExtents(mGrid.cellSize, glm::normalize(toModel * right),
+                                       glm::normalize(toModel * up));
+      mProgram.set("uModel", model);
+      mProgram.set("uHalf", half);
+      mProgram.set("uCamera0", camera0);
+      mProgram.set("uCamera1", camera1);
+      mProgram.set("uWeight0", weight0);
+      mProgram.set("uWeight1", 1.0f - weight0);
+      mProgram.set("uOrderOffset", int(nearestOrder(direction) * mGrid.cells.size()));
+      g.DrawArrays(GL_TRIANGLES, 0, GLsizei(mGrid.cells.size() * 6));
+    }
+    g.DepthMask(GL_TRUE);
+    g.Disable(GL_BLEND);
+    g.BindVertexArray(0);
+  }
+
+  nlohmann::json effectiveParams() const override { return writeParams(mParams); }
+  nlohmann::json bakeReport() const override { return mReport; }
+
+  void save(AssetFolder& asset) const override {
+    asset.describe("volumetric_opacity", effectiveParams(), mReport);
+    auto& header = asset.header();
+    header["root"] = {mGrid.root.min.x, mGrid.root.min.y, mGrid.root.min.z,
+                      mGrid.root.max.x, mGrid.root.max.y, mGrid.root.max.z};
+    header["level"] = mGrid.level;
+    header["cells_per_level"] = mGrid.nonEmptyPerLevel;
+    nlohmann::json directions = nlohmann::json::array();
+    for (const glm::vec3& d : mCameraDirections) directions.push_back({d.x, d.y, d.z});
+    header["camera_directions"] = directions;
+    header["texels"] = mTextures.texels;
+    asset.writeBlob("cells.bin", mGrid.cells);
+    asset.writeBlob("transparency.bin", mGrid.transparency);
+    asset.writeBlob("tile_of_cell_view.bin", mTextures.tile);
+    asset.writeBlob("alpha.bin", mTextures.alpha);
+    asset.writeBlob("slot_of_tile.bin", mTextures.slotOfTile);
+    asset.writeBlob("slot_rgb.bin", mTextures.slotRgb);
+    asset.writeHeader();
+  }
+
+  void load(AssetFolder& asset) override {
+    asset.readHeaderOf("volumetric_opacity");
+    const auto& header = asset.header();
+    const std::string folder = asset.folder().string();
+    mReport = header.at("report");
+    const auto& r = header.at("root");
+    mGrid = {};
+    mGrid.root.min = {r[0], r[1], r[2]};
+    mGrid.root.max = {r[3], r[4], r[5]};
+    mGrid.level = header.at("level");
+    if (mGrid.level < 1 || mGrid.level > 5) throwInputError("{}: level out of range", folder);
+    mGrid.side = 1;
+    for (int l = 0; l < mGrid.level; ++l) mGrid.side *= 3;
+    mGrid.cellSize = mGrid.root.extent().x / float(mGrid.side);
+    mGrid.nonEmptyPerLevel = header.at("cells_per_level").get<std::vector<int>>();
+    mCameraDirections.clear();
+    for (const auto& d : header.at("camera_directions"))
+      mCameraDirections.push_back({d[0], d[1], d[2]});
+    mTextures = {};
+    mTextures.texels = header.at("texels");
+    mGrid.cells = asset.readBlobAs<glm::ivec3>("cells.bin");
+    mGrid.transparency = asset.readBlobAs<float>("transparency.bin");
+    mTextures.tile = asset.readBlobAs<uint32_t>("tile_of_cell_view.bin");
+    mTextures.alpha = asset.readBlobAs<uint8_t>("alpha.bin");
+    mTextures.slotOfTile = asset.readBlobAs<uint32_t>("slot_of_tile.bin");
+    mTextures.slotRgb = asset.readBlobAs<uint8_t>("slot_rgb.bin");
+    // Every index the shaders follow is checked here, so a corrupt asset cannot read past a buffer.
+    const size_t texelCount = size_t(mTextures.texels) * mTextures.texels;
+    const size_t tiles = mTextures.alpha.size() / std::max<size_t>(texelCount, 1);
+    bool valid = mTextures.texels >= 2 && mTextures.texels <= 8 && !mCameraDirections.empty() &&
+                 mGrid.transparency.size() == mGrid.cells.size() &&
+                 mTextures.tile.size() == mCameraDirections.size() * mGrid.cells.size() &&
+                 mTextures.alpha.size() == tiles * texelCount &&
+                 mTextures.slotOfTile.size() == tiles;
+    for (const glm::ivec3& c : mGrid.cells)
+      valid = valid && glm::all(glm::greaterThanEqual(c, glm::ivec3(0))) &&
+              glm::all(glm::lessThan(c, glm::ivec3(mGrid.side)));
+    for (uint32_t t : mTextures.tile) valid = valid && (t == kNoTile || t < tiles);
+    for (uint32_t s : mTextures.slotOfTile) valid = valid && s < mTextures.slotCount();
+    if (!valid) throwInputError("{}: corrupt volumetric_opacity asset", folder);
+    mGrid.rebuildLattice();
+    buildOrders();
+  }
+
+ private:
+  void buildOrders() {
+    const std::vector<glm::vec3> directions = orderDirections();
+    const size_t n = mGrid.cells.size();
+    mOrders.assign(directions.size() * n, 0);
+    std::vector<float> key(n);
+    for (size_t d = 0; d < directions.size(); ++d) {
+      for (size_t c = 0; c < n; ++c) key[c] = glm::dot(mGrid.cellCenter(c), directions[d]);
+      auto begin = mOrders.begin() + std::ptrdiff_t(d * n);
+      std::iota(begin, begin + std::ptrdiff_t(n), 0u);
+      // Farthest from a viewer along +direction first.
+      std::stable_sort(begin, begin + std::ptrdiff_t(n),
+                       [&](uint32_t a, uint32_t b) { return key[a] < key[b]; });
+    }
+  }
+
+  size_t nearestOrder(const glm::vec3& direction) const {
+    static const std::vector<glm::vec3> directions = orderDirections();
+    size_t best = 0;
+    for (size_t d = 1; d < directions.size(); ++d)
+      if (glm::dot(directions[d], direction) > glm::dot(directions[best], direction)) best = d;
+    return best;
+  }
+
+  // The two input cameras closest in direction and the first one's weight, by angle (§6,
+  // [Debevec et al. 1996]): w0 = θ1 / (θ0 + θ1).
+  std::tuple<int, int, float> closestCameras(const glm::vec3& direction) const {
+    int first = -1, second = -1;
+    float angleFirst = 10.0f, angleSecond = 10.0f;
+    for (size_t c = 0; c < mCameraDirections.size(); ++c) {
+      const float angle =
+          std::acos(std::clamp(glm::dot(mCameraDirections[c], direction), -1.0f, 1.0f));
+      if (angle < angleFirst) {
+        second = first, angleSecond = angleFirst;
+        first = int(c), angleFirst = angle;
+      } else if (angle < angleSecond) {
+        second = int(c), angleSecond = angle;
+      }
+    }
+    if (second < 0) return {first, first, 1.0f};
+    const float sum = angleFirst + angleSecond;
+    return {first, second, sum > 1e-6f ? angleSecond / sum : 1.0f};
+  }
+
+  VolumetricParams mParams;
+  nlohmann::json mReport;
+  OpacityGrid mGrid;
+  PackedTextures mTextures;
+  std::vector<glm::vec3> mCameraDirections;  // unit, from the grid centre to each input camera
+  std::vector<uint32_t> mOrders;             // 26 × cells, back to front per direction
+  std::array<gl::Buffer, 6> mBuffers;
+  gl::Program mProgram;
+  gl::VertexArray mVao;
+};
+
+}  // namespace
+
+void registerVolumetricOpacity(MethodRegistry& registry) {
+  addMethod<VolumetricOpacity, VolumetricParams>(
+      registry, "volumetric_opacity",
+      "volumetric opacity reconstruction with view-dependent billboards (Reche-Martinez, Martin, "
+      "Drettakis 2004)",
+      /*needsMesh=*/false);
+}
+
+}  // namespace canopy
