@@ -6,6 +6,7 @@
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
+#include "bench/capture_export.h"
 #include "bench/experiment.h"
 #include "bench/merge.h"
 #include "bench/runner.h"
@@ -37,6 +38,22 @@ int main(int argc, char** argv) {
   exportTree->add_option("--seed", exportSeed, "L-system seed");
   exportTree->add_option("--leaves", exportLeaves, "leaf count (0: the preset's)");
   exportTree->add_option("--out", exportOut, "output folder")->required();
+  // canopy-bench export-captures --preset sparse --train 22 --test 8 --resolution 512 --out DIR
+  CLI::App* exportCapturesCommand = app.add_subcommand(
+      "export-captures", "photograph a built-in tree into a NeRF-layout capture folder");
+  std::string capturePreset = "broadleaf", captureOut;
+  int64_t captureSeed = 1;
+  int captureLeaves = 0;
+  CaptureExportOptions captureOptions;
+  exportCapturesCommand->add_option("--preset", capturePreset, "broadleaf | shrub | sparse");
+  exportCapturesCommand->add_option("--seed", captureSeed, "L-system seed");
+  exportCapturesCommand->add_option("--leaves", captureLeaves, "leaf count (0: the preset's)");
+  exportCapturesCommand->add_option("--train", captureOptions.trainViews, "training views");
+  exportCapturesCommand->add_option("--test", captureOptions.testViews, "held-out test views");
+  exportCapturesCommand->add_option("--resolution", captureOptions.resolution, "pixels per side");
+  exportCapturesCommand->add_option("--distance", captureOptions.distance,
+                                    "camera distance in bounding radii");
+  exportCapturesCommand->add_option("--out", captureOut, "output folder")->required();
   // canopy-bench merge OUT RUN... : joins shard outputs
   CLI::App* merge = app.add_subcommand("merge", "join shard outputs into one run folder");
   std::string mergeOut;
@@ -63,6 +80,23 @@ int main(int argc, char** argv) {
       if (exportLeaves < 0) throwInputError("--leaves: must be >= 0");
       const Tree tree = loadTree(spec);
       std::printf("%s\n", exportTreeObj(tree, exportOut).string().c_str());
+      return kExitOk;
+    }
+    if (*exportCapturesCommand) {
+      if (captureSeed < 0 || captureLeaves < 0) throwInputError("--seed, --leaves: must be >= 0");
+      if (captureOptions.trainViews < 2 || captureOptions.testViews < 1 ||
+          captureOptions.resolution < 16 || captureOptions.resolution > 4096 ||
+          !(captureOptions.distance > 1.1f)) {
+        throwInputError(
+            "export-captures: need --train >= 2, --test >= 1, --resolution in [16, 4096], "
+            "--distance > 1.1");
+      }
+      TreeSpec spec;
+      spec.preset = capturePreset;
+      spec.seed = static_cast<uint64_t>(captureSeed);
+      spec.leaves = captureLeaves;
+      exportCaptures(loadTree(spec), captureOut, captureOptions, gl::parseBackend(backend));
+      std::printf("%s\n", captureOut.c_str());
       return kExitOk;
     }
     if (*merge) {

@@ -244,9 +244,10 @@ std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std
       out += fmt::format("| {} | {} |", row.tree, row.variant);
       for (int n : sizes) {
         const nlohmann::json* f = forestOfSize(row, n);
-        out += f ? fmt::format(" {} / {} / {}× |", number(jsonNumber(f, "frame_ms_median"), 1),
+        const double speedup = jsonNumber(f, "speedup_vs_polygonal");
+        out += f ? fmt::format(" {} / {} / {} |", number(jsonNumber(f, "frame_ms_median"), 1),
                                number(jsonNumber(f, "fps"), 1),
-                               number(jsonNumber(f, "speedup_vs_polygonal"), 2))
+                               std::isfinite(speedup) ? number(speedup, 2) + "×" : "–")
                  : " |";
       }
       out += "\n";

@@ -9,6 +9,7 @@
 #include <glm/trigonometric.hpp>
 #include <nlohmann/json.hpp>
 
+#include "common/atomic_file.h"
 #include "common/error.h"
 
 namespace canopy {
@@ -90,6 +91,23 @@ bool projectBoxInside(const PixelCamera& camera, const Aabb& box, PixelRect& rec
   return true;
 }
 
+bool viewCarvesBox(const PixelCamera& camera, const AlphaIntegral& mask, const Aabb& box) {
+  glm::vec2 lo(std::numeric_limits<float>::max()), hi(std::numeric_limits<float>::lowest());
+  for (int c = 0; c < 8; ++c) {
+    const glm::vec3 corner(c & 1 ? box.max.x : box.min.x, c & 2 ? box.max.y : box.min.y,
+                           c & 4 ? box.max.z : box.min.z);
+    if (camera.depth(corner) <= 1e-6f) return false;
+    const glm::vec2 p = camera.project(corner);
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  if (hi.x <= 0.0f || hi.y <= 0.0f || lo.x >= float(camera.width()) ||
+      lo.y >= float(camera.height()))
+    return true;
+  PixelRect r;
+  return projectBoxInside(camera, box, r) && mask.foregroundCount(r.x0, r.y0, r.x1, r.y1) == 0;
+}
+
 Camera cameraFromNerf(const glm::mat4& cameraToWorld, float cameraAngleX, int width, int height) {
   Camera camera;
   camera.position = glm::vec3(cameraToWorld[3]);
@@ -110,6 +128,41 @@ ImageRgbaF toLinearPremultiplied(const ImageRgba8& image) {
     out.pixels[i * 4 + 3] = a;
   }
   return out;
+}
+
+ImageRgba8 toStraightSrgb8(const ImageRgbaF& image) {
+  ImageRgba8 out(image.width, image.height);
+  for (size_t i = 0; i < size_t(image.width) * image.height; ++i) {
+    const float a = std::clamp(image.pixels[i * 4 + 3], 0.0f, 1.0f);
+    for (int c = 0; c < 3; ++c)
+      out.pixels[i * 4 + c] =
+          a > 0.0f ? encodeSrgb8(std::clamp(image.pixels[i * 4 + c] / a, 0.0f, 1.0f)) : 0;
+    out.pixels[i * 4 + 3] = uint8_t(std::lround(a * 255.0f));
+  }
+  return out;
+}
+
+void writeNerfCaptures(const std::filesystem::path& folder, const std::vector<CapturedView>& train,
+                       const std::vector<CapturedView>& test) {
+  for (const auto& [split, views] :
+       {std::pair{std::string("train"), &train}, std::pair{std::string("test"), &test}}) {
+    nlohmann::json json = {{"frames", nlohmann::json::array()}};
+    for (size_t i = 0; i < views->size(); ++i) {
+      const CapturedView& v = (*views)[i];
+      const float tanHalfY = std::tan(0.5f * glm::radians(v.camera.fovYDegrees));
+      json["camera_angle_x"] =
+          2.0f * std::atan(tanHalfY * float(v.image.width) / float(v.image.height));
+      const glm::mat4 cameraToWorld = glm::inverse(v.camera.view());
+      nlohmann::json rows = nlohmann::json::array();
+      for (int r = 0; r < 4; ++r)
+        rows.push_back(
+            {cameraToWorld[0][r], cameraToWorld[1][r], cameraToWorld[2][r], cameraToWorld[3][r]});
+      const std::string file = split + "/r_" + std::to_string(i);
+      writePng(folder / (file + ".png"), toStraightSrgb8(v.image));
+      json["frames"].push_back({{"file_path", "./" + file}, {"transform_matrix", rows}});
+    }
+    writeTextAtomically(folder / ("transforms_" + split + ".json"), json.dump(2));
+  }
 }
 
 namespace {
@@ -202,11 +255,8 @@ Aabb visualHullBounds(const std::vector<CapturedView>& views, const Aabb& search
         box.min = searchBox.min + cell * glm::vec3(x, y, z);
         box.max = box.min + cell;
         bool carved = false;
-        for (size_t v = 0; v < views.size() && !carved; ++v) {
-          PixelRect r;
-          if (projectBoxInside(cameras[v], box, r))
-            carved = masks[v].foregroundCount(r.x0, r.y0, r.x1, r.y1) == 0;
-        }
+        for (size_t v = 0; v < views.size() && !carved; ++v)
+          carved = viewCarvesBox(cameras[v], masks[v], box);
         if (!carved) hull.extend(box);
       }
     }

@@ -75,6 +75,10 @@ struct PixelRect {
 };
 bool projectBoxInside(const PixelCamera& camera, const Aabb& box, PixelRect& rect);
 
+// Whether one view proves a box empty: its projection lies wholly inside the image on pixels with
+// no foreground, or wholly outside the image (a capture shows the whole object in every view).
+bool viewCarvesBox(const PixelCamera& camera, const AlphaIntegral& mask, const Aabb& box);
+
 // Reads a folder in the NeRF synthetic layout: transforms_train.json and transforms_test.json,
 // each {"camera_angle_x": radians, "frames": [{"file_path": "./train/r_0", "transform_matrix":
 // 4×4 camera-to-world, camera looking down −Z}]}; images are RGBA PNGs (".png" is appended when
@@ -91,7 +95,14 @@ Camera cameraFromNerf(const glm::mat4& cameraToWorld, float cameraAngleX, int wi
 Aabb visualHullBounds(const std::vector<CapturedView>& views, const Aabb& searchBox,
                       int resolution = 64, float alphaThreshold = 0.02f);
 
-// Straight sRGB 8-bit image → linear premultiplied float image.
+// Straight sRGB 8-bit image → linear premultiplied float image, and back.
 ImageRgbaF toLinearPremultiplied(const ImageRgba8& image);
+ImageRgba8 toStraightSrgb8(const ImageRgbaF& image);
+
+// Writes views as a NeRF-layout folder: <split>/r_<i>.png and transforms_<split>.json for the
+// splits "train" and "test" (the inverse of readNerfCaptures). All views share one horizontal
+// field of view and size.
+void writeNerfCaptures(const std::filesystem::path& folder, const std::vector<CapturedView>& train,
+                       const std::vector<CapturedView>& test);
 
 }  // namespace canopy

@@ -54,6 +54,22 @@ Camera orbitCamera(const Aabb& bounds, const ViewPose& pose, float fovYDegrees) 
   return camera;
 }
 
+std::vector<Camera> captureRingCameras(const Aabb& bounds, int count, float distance,
+                                       float azimuthOffset, float fovYDegrees) {
+  const int high = std::max(1, int(std::lround(count * 2.0 / 22.0)));
+  const int middle = std::max(1, int(std::lround(count * 6.0 / 22.0)));
+  const int low = std::max(1, count - high - middle);
+  const std::pair<float, int> rings[3] = {{5.0f, low}, {35.0f, middle}, {65.0f, high}};
+  std::vector<Camera> cameras;
+  for (const auto& [elevation, n] : rings) {
+    for (int i = 0; i < n && int(cameras.size()) < count; ++i) {
+      const float azimuth = azimuthOffset + 360.0f * float(i) / float(n) + elevation;
+      cameras.push_back(orbitCamera(bounds, {distance, elevation, azimuth}, fovYDegrees));
+    }
+  }
+  return cameras;
+}
+
 glm::mat4 Instance::modelMatrix() const {
   glm::mat4 m = glm::translate(glm::mat4(1.0f), position);
   m = glm::rotate(m, rotation, glm::vec3(0, 1, 0));

@@ -38,6 +38,13 @@ std::vector<ViewPose> makeViewRings(const std::vector<float>& distances,
 // up is the horizontal direction away from the camera's azimuth, continuous with lower rings.
 Camera orbitCamera(const Aabb& bounds, const ViewPose& pose, float fovYDegrees);
 
+// Cameras photographing a tree as a person walking around it would (Reche et al. 2004, §4):
+// `count` views on three rings at 5°, 35° and 65° elevation (about 14:6:2), `distance` bounding
+// radii from the centre, azimuths starting at `azimuthOffset` degrees (plus the ring's
+// elevation) so they avoid the evaluation's multiples of 90°.
+std::vector<Camera> captureRingCameras(const Aabb& bounds, int count, float distance,
+                                       float azimuthOffset, float fovYDegrees = 40.0f);
+
 // One tree of a forest: placement in the world.
 struct Instance {
   glm::vec3 position{0.0f};

@@ -75,12 +75,8 @@ OpacityGrid buildOpacityGrid(const Aabb& cube, int level, const std::vector<Opac
       Aabb box;
       box.min = cube.min + glm::vec3(current[i]) * size;
       box.max = box.min + glm::vec3(size);
-      for (const OpacityView& v : views) {
-        PixelRect r;
-        if (projectBoxInside(v.camera, box, r) &&
-            v.alpha.foregroundCount(r.x0, r.y0, r.x1, r.y1) == 0)
-          return;
-      }
+      for (const OpacityView& v : views)
+        if (viewCarvesBox(v.camera, v.alpha, box)) return;
       keep[i] = 1;
     });
     std::vector<glm::ivec3> kept;

@@ -47,9 +47,9 @@ std::vector<OpacityView> prepareViews(const std::vector<CapturedView>& views,
 // The smallest cube around `bounds` (slightly enlarged so surface cells are not cut).
 Aabb enclosingCube(const Aabb& bounds);
 
-// Builds the grid (§7) by recursive subdivision of the cells no view carves away (a view carves a
-// cell when the cell projects wholly inside its image onto pixels with alpha <= foregroundAlpha),
-// and initialises each cell (§5) with 1 − min over views of the mean alpha in its projection.
+// Builds the grid (§7) by recursive subdivision of the cells no view carves away
+// (viewCarvesBox: outside the visual hull of the alpha masks), and initialises each cell (§5)
+// with 1 − min over views of the mean alpha in its projection.
 OpacityGrid buildOpacityGrid(const Aabb& cube, int level, const std::vector<OpacityView>& views,
                              float foregroundAlpha);
 

@@ -58,24 +58,6 @@ double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// The photographs of a mesh tree (§4): cameras on three rings around the tree, most of them low
-// as a photographer walking around it would take them, looking at the bounding-sphere centre.
-std::vector<Camera> captureCameras(const Aabb& bounds, int count, float distance) {
-  const int high = std::max(1, int(std::lround(count * 2.0 / 22.0)));
-  const int middle = std::max(1, int(std::lround(count * 6.0 / 22.0)));
-  const int low = std::max(1, count - high - middle);
-  std::vector<Camera> cameras;
-  const std::array<std::pair<float, int>, 3> rings{{{5.0f, low}, {35.0f, middle}, {65.0f, high}}};
-  for (const auto& [elevation, n] : rings) {
-    for (int i = 0; i < n && int(cameras.size()) < count; ++i) {
-      // Offset from the evaluation's azimuths (multiples of 90°) so no photograph is a test view.
-      const float azimuth = 5.0f + 360.0f * float(i) / float(n) + elevation;
-      cameras.push_back(orbitCamera(bounds, {distance, elevation, azimuth}, 40.0f));
-    }
-  }
-  return cameras;
-}
-
 // 26 directions (faces, edges and corners of a cube): each has the cells sorted back to front
 // for a viewer far along it; a draw uses the one nearest its viewing direction.
 std::vector<glm::vec3> orderDirections() {
@@ -104,7 +86,7 @@ class VolumetricOpacity final : public Method {
       if (!ctx.photograph)
         throw std::logic_error("volumetric_opacity: bake needs BakeContext::photograph");
       for (const Camera& camera :
-           captureCameras(tree.bounds, mParams.views, mParams.captureDistance)) {
+           captureRingCameras(tree.bounds, mParams.views, mParams.captureDistance, 5.0f)) {
         rendered.push_back(
             {camera, ctx.photograph(camera, mParams.captureResolution, mParams.captureResolution),
              fmt::format("view {}", rendered.size())});

@@ -223,6 +223,52 @@ TEST(BenchCli, BadTreeFilesExitWithCode2NamingTheFile) {
 namespace canopy {
 namespace {
 
+TEST(BenchCli, CaptureFolderTreesAreScoredOnTheirHeldOutViews) {
+  test::TempDir dir;
+  ASSERT_EQ(test::runCommand(kBench +
+                             " export-captures --preset sparse --leaves 300 --train 10 "
+                             "--test 3 --resolution 64 --out " +
+                             (dir / "capture").string()),
+            0);
+  test::writeText(dir / "captures.json", R"({"name": "captures", "trees": [{"captures": "capture"}],
+    "methods": [{"method": "polygonal"},
+                {"method": "volumetric_opacity", "params": {"level": 3, "max_iterations": 4}}],
+    "views": {"resolution": [64, 64]}, "forests": {"sizes": [1, 3], "frames": 2, "warmup": 1}})");
+  ASSERT_EQ(test::runCommand(kBench + " --quiet --no-images --config " +
+                             (dir / "captures.json").string() + " --out " + (dir / "out").string()),
+            0);
+  int views = 0, skips = 0, forests = 0;
+  for (const auto& record : ResultsStore::readRecords(dir / "out" / "metrics.jsonl")) {
+    const std::string kind = record.at("kind");
+    if (kind == "skip") {
+      ++skips;
+      EXPECT_EQ(record.at("method"), "polygonal") << "it needs a mesh";
+    } else if (kind == "view") {
+      ++views;
+      EXPECT_EQ(record.at("method"), "volumetric_opacity");
+      EXPECT_NE(record.at("capture_view").get<std::string>().find("test"), std::string::npos);
+      // Scored against the photograph it never saw: recognisably the tree, far from exact.
+      EXPECT_GT(record.at("psnr").get<double>(), 12.0);
+      EXPECT_LT(record.at("psnr").get<double>(), 60.0);
+    } else if (kind == "forest") {
+      ++forests;
+      EXPECT_TRUE(record.at("speedup_vs_polygonal").is_null()) << "no reference to time";
+    }
+  }
+  EXPECT_EQ(skips, 1);
+  EXPECT_EQ(views, 3);
+  EXPECT_EQ(forests, 2);
+  // A missing capture folder is bad input naming it.
+  test::writeText(dir / "missing.json", R"({"name": "m", "trees": [{"captures": "nowhere"}],
+    "methods": [{"method": "volumetric_opacity"}]})");
+  std::string error;
+  EXPECT_EQ(test::runCommand(kBench + " --quiet --config " + (dir / "missing.json").string() +
+                                 " --out " + (dir / "out2").string(),
+                             &error),
+            2);
+  EXPECT_NE(error.find("nowhere"), std::string::npos) << error;
+}
+
 TEST(Report, LatexTableHasOneCellPerColumnAndEscapesNames) {
   std::vector<nlohmann::json> records = {
       {{"kind", "bake"},
