@@ -141,6 +141,36 @@ ForestSettings parseForests(ConfigObject& config, const RenderSettings& render) 
   return forests;
 }
 
+PoppingSettings parsePopping(ConfigObject& config) {
+  PoppingSettings popping;
+  popping.enabled = true;
+  popping.frames = readNumber<int>(config, "frames", popping.frames, 2, 10'000);
+  popping.nearDistance = readNumber<float>(config, "near", popping.nearDistance, 1.01f, 10'000.0f);
+  popping.farDistance = readNumber<float>(config, "far", popping.farDistance, 1.01f, 100'000.0f);
+  if (popping.farDistance <= popping.nearDistance)
+    throwInputError("config {}: must be greater than \"near\"", config.keyPath("far"));
+  popping.elevation = readNumber<float>(config, "elevation", popping.elevation, -89.0f, 89.0f);
+  popping.orbitDistance =
+      readNumber<float>(config, "orbit_distance", popping.orbitDistance, 1.01f, 10'000.0f);
+  readResolution(config, popping.width, popping.height);
+  config.finish("popping");
+  return popping;
+}
+
+BudgetSettings parseBudget(ConfigObject& config) {
+  BudgetSettings budget;
+  budget.memoryMb = readNumber<double>(config, "memory_mb", 0.0, 0.0, 1e6);
+  budget.psnrDb = readNumber<double>(config, "psnr_db", 0.0, 0.0, 100.0);
+  if ((budget.memoryMb > 0.0) == (budget.psnrDb > 0.0)) {
+    throwInputError("config {}: give exactly one of \"memory_mb\" or \"psnr_db\" (> 0)",
+                    config.path());
+  }
+  budget.tolerance = readNumber<double>(config, "tolerance", budget.tolerance, 0.001, 0.5);
+  budget.maxSteps = readNumber<int>(config, "max_steps", budget.maxSteps, 2, 64);
+  config.finish("budget");
+  return budget;
+}
+
 }  // namespace
 
 ExperimentConfig parseExperimentConfig(const nlohmann::json& json,
@@ -203,6 +233,14 @@ ExperimentConfig parseExperimentConfig(const nlohmann::json& json,
   } else {
     experiment.forests.width = experiment.views.render.width;
     experiment.forests.height = experiment.views.render.height;
+  }
+  if (config.has("popping")) {
+    ConfigObject popping = config.child("popping");
+    experiment.popping = parsePopping(popping);
+  }
+  if (config.has("budget")) {
+    ConfigObject budget = config.child("budget");
+    experiment.budget = parseBudget(budget);
   }
   config.finish();
   return experiment;

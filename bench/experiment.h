@@ -1,12 +1,15 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "bench/budget.h"
 #include "bench/harness.h"
+#include "bench/popping.h"
 #include "common/tree_source.h"
 
 namespace canopy {
@@ -40,8 +43,10 @@ struct ExperimentConfig {
   std::vector<MethodVariant> variants;
   ViewSettings views;
   ForestSettings forests;
-  nlohmann::json raw;  // the config as read
-  std::string hash;    // of its canonical form
+  PoppingSettings popping;               // enabled when the config has "popping"
+  std::optional<BudgetSettings> budget;  // the config's "budget", if any
+  nlohmann::json raw;                    // the config as read
+  std::string hash;                      // of its canonical form
 };
 
 // Parses and validates a whole config; every unknown key or out-of-range value is an InputError

@@ -129,6 +129,8 @@ std::vector<SummaryRow> summarize(const std::vector<nlohmann::json>& records) {
       ++row.views;
     } else if (kind == "forest") {
       row.forests.push_back(record);
+    } else if (kind == "popping") {
+      row.popping.push_back(record);
     } else if (kind == "skip") {
       row.skipped = record.value("reason", "skipped");
     }
@@ -148,6 +150,47 @@ std::vector<SummaryRow> summarize(const std::vector<nlohmann::json>& records) {
   return rows;
 }
 
+namespace {
+
+const nlohmann::json* poppingOf(const SummaryRow& row, const std::string& path) {
+  for (const nlohmann::json& p : row.popping)
+    if (p.value("path", "") == path) return &p;
+  return nullptr;
+}
+
+std::vector<std::string> poppingPaths(const std::vector<SummaryRow>& rows) {
+  std::set<std::string> paths;
+  for (const SummaryRow& row : rows)
+    for (const auto& p : row.popping) paths.insert(p.value("path", ""));
+  return {paths.begin(), paths.end()};
+}
+
+const nlohmann::json* budgetOf(const SummaryRow& row) {
+  return row.bake.is_object() && row.bake.contains("budget") ? &row.bake["budget"] : nullptr;
+}
+
+}  // namespace
+
+std::string formatPoppingCsv(const std::vector<SummaryRow>& rows) {
+  std::string out;
+  for (const SummaryRow& row : rows) {
+    for (const nlohmann::json& p : row.popping) {
+      const auto& distance = p.at("distance");
+      for (size_t i = 0; i < distance.size(); ++i) {
+        out += fmt::format(
+            "{},{},{},{},{},{},{},{},{},{}\n", csvField(row.tree), csvField(row.variant),
+            p.value("path", ""), i, distance[i].get<double>(), p.at("psnr_frame")[i].get<double>(),
+            p.at("change")[i].get<double>(), p.at("reference_change")[i].get<double>(),
+            p.at("temporal_excess")[i].get<double>(), p.at("lod_switch")[i].get<bool>() ? 1 : 0);
+      }
+    }
+  }
+  if (out.empty()) return out;
+  return "tree,variant,path,frame,distance,psnr,change,reference_change,temporal_excess,"
+         "lod_switch\n" +
+         out;
+}
+
 std::string formatSummaryCsv(const std::vector<SummaryRow>& rows) {
   const auto distances = collectKeys(rows, [](const SummaryRow& r) { return r.psnrByDistance; });
   const auto elevations = collectKeys(rows, [](const SummaryRow& r) { return r.psnrByElevation; });
@@ -160,7 +203,10 @@ std::string formatSummaryCsv(const std::vector<SummaryRow>& rows) {
   for (int n : sizes)
     out += fmt::format(",frame_ms_median_n{0},frame_ms_p95_n{0},fps_n{0},speedup_vs_polygonal_n{0}",
                        n);
-  out += "\n";
+  const auto paths = poppingPaths(rows);
+  for (const std::string& path : paths)
+    out += fmt::format(",popping_{0}_peak,popping_{0}_mean,popping_{0}_switches", path);
+  out += ",budget_parameter,budget_value,budget_reached,skipped\n";
   for (const SummaryRow& row : rows) {
     const nlohmann::json& bake = row.bake;
     const nlohmann::json memory =
@@ -190,7 +236,16 @@ std::string formatSummaryCsv(const std::vector<SummaryRow>& rows) {
              number(jsonNumber(f, "frame_ms_p95"), 3) + "," + number(jsonNumber(f, "fps"), 3) +
              "," + number(jsonNumber(f, "speedup_vs_polygonal"), 3);
     }
-    out += "\n";
+    for (const std::string& path : paths) {
+      const nlohmann::json* p = poppingOf(row, path);
+      out += "," + number(jsonNumber(p, "peak_excess"), 3) + "," +
+             number(jsonNumber(p, "mean_excess"), 3) + "," + number(jsonNumber(p, "switches"), 0);
+    }
+    const nlohmann::json* budget = budgetOf(row);
+    out += budget ? fmt::format(",{},{},{}", budget->value("parameter", ""),
+                                (*budget)["value"].dump(), budget->value("reached", false) ? 1 : 0)
+                  : ",,,";
+    out += "," + csvField(row.skipped) + "\n";
   }
   return out;
 }
@@ -218,6 +273,46 @@ std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std
                        number(row.psnr, 2), number(row.ssim, 3), number(row.coverageError, 4));
     for (double d : distances) out += " " + number(lookup(row.psnrByDistance, d), 2) + " |";
     out += "\n";
+  }
+  const auto paths = poppingPaths(rows);
+  if (!paths.empty()) {
+    std::vector<std::string> columns;
+    for (const std::string& path : paths) {
+      columns.push_back(path + " peak");
+      columns.push_back(path + " mean");
+      columns.push_back(path + " LoD switches");
+    }
+    out += "\n## Popping (temporal error in excess of the reference's, 8-bit RMS)\n\n" +
+           markdownHeader({"tree", "method"}, columns);
+    for (const SummaryRow& row : rows) {
+      if (row.popping.empty()) continue;
+      out += fmt::format("| {} | {} |", row.tree, row.variant);
+      for (const std::string& path : paths) {
+        const nlohmann::json* p = poppingOf(row, path);
+        out += " " + number(jsonNumber(p, "peak_excess"), 2) + " | " +
+               number(jsonNumber(p, "mean_excess"), 2) + " | " +
+               number(jsonNumber(p, "switches"), 0) + " |";
+      }
+      out += "\n";
+    }
+  }
+  bool anyBudget = false;
+  for (const SummaryRow& row : rows) anyBudget = anyBudget || budgetOf(row);
+  if (anyBudget) {
+    out += "\n## Budget (each method's memory knob set by bisection)\n\n" +
+           markdownHeader({"tree", "method", "parameter", "reached"},
+                          {"value", "target", "memory MB", "PSNR", "bakes"});
+    for (const SummaryRow& row : rows) {
+      const nlohmann::json* b = budgetOf(row);
+      if (!b) continue;
+      const double memory = mb(row.bake["memory_bytes"].value("total", nlohmann::json()));
+      out +=
+          fmt::format("| {} | {} | {} | {} | {} | {} {} | {} | {} | {} |\n", row.tree, row.variant,
+                      b->value("parameter", ""), b->value("reached", false) ? "yes" : "no",
+                      (*b)["value"].dump(), number(jsonNumber(b, "target"), 2),
+                      b->value("mode", "") == "memory_mb" ? "MB" : "dB", number(memory, 2),
+                      number(row.psnr, 2), number(jsonNumber(b, "steps"), 0));
+    }
   }
   bool anySkipped = false;
   for (const SummaryRow& row : rows) anySkipped = anySkipped || !row.skipped.empty();
@@ -328,6 +423,8 @@ void writeSummaries(const std::filesystem::path& directory,
   writeTextAtomically(directory / "summary.csv", formatSummaryCsv(rows));
   writeTextAtomically(directory / "summary.md", formatSummaryMarkdown(rows, title, renderer));
   writeTextAtomically(directory / "summary.tex", formatSummaryLatex(rows, title, renderer));
+  const std::string popping = formatPoppingCsv(rows);
+  if (!popping.empty()) writeTextAtomically(directory / "popping.csv", popping);
 }
 
 }  // namespace canopy

@@ -20,10 +20,15 @@ struct SummaryRow {
   std::vector<std::pair<double, double>> psnrByDistance;   // (distance, mean PSNR)
   std::vector<std::pair<double, double>> psnrByElevation;  // (elevation, mean PSNR)
   std::vector<nlohmann::json> forests;                     // kind:"forest" records by size
+  std::vector<nlohmann::json> popping;                     // kind:"popping" records (dolly, orbit)
   std::string skipped;  // why the method did not run on this tree (kind:"skip"), else empty
 };
 
 std::vector<SummaryRow> summarize(const std::vector<nlohmann::json>& records);
+
+// One line per frame of every popping record: tree, variant, path, frame, distance, psnr,
+// change, reference_change, temporal_excess, lod_switch (0/1). Empty when there are none.
+std::string formatPoppingCsv(const std::vector<SummaryRow>& rows);
 
 std::string formatSummaryCsv(const std::vector<SummaryRow>& rows);
 std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std::string& title,

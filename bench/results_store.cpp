@@ -54,6 +54,13 @@ ResultsStore::ResultsStore(std::filesystem::path directory) : mDirectory(std::mo
   }
 }
 
+const nlohmann::json* ResultsStore::find(const std::string& key) const {
+  if (!has(key)) return nullptr;
+  for (const nlohmann::json& record : mRecords)
+    if (record.value("record_key", "") == key) return &record;
+  return nullptr;
+}
+
 void ResultsStore::append(nlohmann::json record, const std::string& key) {
   record["record_key"] = key;
   appendLineDurably(metricsPath(), record.dump());

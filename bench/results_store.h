@@ -19,6 +19,8 @@ class ResultsStore {
   const std::filesystem::path& directory() const { return mDirectory; }
   std::filesystem::path metricsPath() const { return mDirectory / "metrics.jsonl"; }
   bool has(const std::string& key) const { return mKeys.contains(key); }
+  // The record appended under `key`, or nullptr.
+  const nlohmann::json* find(const std::string& key) const;
   // Adds "record_key" to the record and appends it.
   void append(nlohmann::json record, const std::string& key);
   const std::vector<nlohmann::json>& records() const { return mRecords; }

@@ -84,7 +84,7 @@ struct BakedMethod {
 // Bakes and uploads one method under its own ledger owner and measures what the record needs.
 BakedMethod bakeMethod(const MethodVariant& variant, const Tree& tree, gl::Device& device,
                        uint64_t seed, const std::filesystem::path& assetFolder, bool saveAsset,
-                       const std::function<ImageRgbaF(const Camera&, int, int)>& photograph = {}) {
+                       const std::function<ImageRgbaF(const Camera&, int, int)>& photograph) {
   BakedMethod baked;
   baked.method =
       builtinMethods().find(variant.method).create(variant.params, "methods." + variant.label);
@@ -118,6 +118,67 @@ BakedMethod bakeMethod(const MethodVariant& variant, const Tree& tree, gl::Devic
                   {"params", baked.method->effectiveParams()},
                   {"report", baked.method->bakeReport()}};
   return baked;
+}
+
+using Photographer = std::function<ImageRgbaF(const Camera&, int, int)>;
+
+nlohmann::json knobValue(const MemoryKnob& knob, double value) {
+  return knob.integer ? nlohmann::json(int64_t(std::llround(value))) : nlohmann::json(value);
+}
+
+// The budget's search for one variant: each trial bakes and uploads the method with the knob at
+// a value (under its own ledger owner, released after), and measures its memory or mean PSNR.
+nlohmann::json searchBudget(const BudgetSettings& budget, const MemoryKnob& knob,
+                            const MethodVariant& variant, const Tree& tree, gl::Device& device,
+                            uint64_t seed, const Photographer& photograph,
+                            const std::function<double(Method&)>& meanPsnr) {
+  std::map<double, double> memoryAt;
+  const auto trial = [&](double value) {
+    MethodVariant v = variant;
+    v.params[knob.parameter] = knobValue(knob, value);
+    v.label += "/budget";
+    BakedMethod baked = bakeMethod(v, tree, device, seed, {}, false, photograph);
+    memoryAt[value] = baked.record["memory_bytes"]["total"].get<double>() / 1e6;
+    return baked;
+  };
+  KnobSearch search;
+  if (budget.memoryMb > 0.0) {
+    search = bisectToTarget(
+        knob, budget.memoryMb, budget.tolerance,
+        [&](double value) {
+          trial(value);
+          spdlog::info("{}: budget {} = {:g} → {:.2f} MB", variant.label, knob.parameter, value,
+                       memoryAt[value]);
+          return memoryAt[value];
+        },
+        budget.maxSteps);
+  } else {
+    search = leastMemoryReaching(
+        knob, budget.psnrDb,
+        [&](double value) {
+          BakedMethod baked = trial(value);
+          const double psnr = meanPsnr(*baked.method);
+          spdlog::info("{}: budget {} = {:g} → {:.2f} MB, {:.2f} dB", variant.label, knob.parameter,
+                       value, memoryAt[value], psnr);
+          return psnr;
+        },
+        budget.maxSteps);
+  }
+  nlohmann::json trace = nlohmann::json::array();
+  for (const auto& [value, measured] : search.trace)
+    trace.push_back({{"value", knobValue(knob, value)},
+                     {"measured", measured},
+                     {"memory_mb", memoryAt[value]}});
+  return {{"mode", budget.memoryMb > 0.0 ? "memory_mb" : "psnr_db"},
+          {"target", budget.memoryMb > 0.0 ? budget.memoryMb : budget.psnrDb},
+          {"tolerance", budget.tolerance},
+          {"parameter", knob.parameter},
+          {"value", knobValue(knob, search.value)},
+          {"measured", search.measured},
+          {"memory_mb", memoryAt[search.value]},
+          {"reached", search.reached},
+          {"steps", search.steps},
+          {"trace", trace}};
 }
 
 nlohmann::json readPreviousRuns(const std::filesystem::path& metaPath) {
@@ -206,9 +267,10 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
     std::optional<BakedMethod> reference;
     std::map<std::string, ImageRgba8> referenceImages;
     std::map<int, FrameTimes> referenceTimes;
+    std::map<std::string, std::vector<ImageRgba8>> referencePaths;  // popping frames per path
     const auto ensureReference = [&] {
       if (!reference)
-        reference = bakeMethod(referenceVariant, tree, device, config.seed, {}, false);
+        reference = bakeMethod(referenceVariant, tree, device, config.seed, {}, false, {});
     };
     const std::vector<EvalView> views = evaluationViews(tree, config);
     const auto referenceImage = [&](const EvalView& view) -> const ImageRgba8& {
@@ -251,7 +313,7 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
       const std::string prefix = treeLabel + "|" + variant.label + "|";
       const nlohmann::json common = {
           {"tree", treeLabel}, {"method", variant.method}, {"variant", variant.label}};
-      if (tree.captures && builtinMethods().find(variant.method).needsMesh) {
+      if (tree.captures && builtinMethods().find(variant.method).traits.needsMesh) {
         if (!store.has(prefix + "skip")) {
           nlohmann::json record = common;
           record.update({{"kind", "skip"},
@@ -268,14 +330,47 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
       std::vector<int> pendingForests;
       for (int size : config.forests.sizes)
         if (!store.has(prefix + fmt::format("forest|{}", size))) pendingForests.push_back(size);
+      std::vector<std::string> pendingPaths;
+      if (config.popping.enabled)
+        for (const char* path : {"dolly", "orbit"})
+          if (!store.has(prefix + "popping|" + path)) pendingPaths.push_back(path);
       const bool bakeDone = store.has(prefix + "bake");
-      if (bakeDone && pendingViews.empty() && pendingForests.empty()) {
+      if (bakeDone && pendingViews.empty() && pendingForests.empty() && pendingPaths.empty()) {
         spdlog::info("{} on {}: already complete, skipped", variant.label, treeLabel);
         continue;
       }
+      // Equal-memory (or PSNR-target) comparisons turn the method's memory knob first; a resumed
+      // run takes the value its bake record already holds.
+      MethodVariant effective = variant;
+      nlohmann::json budgetRecord;
+      const MethodInfo& info = builtinMethods().find(variant.method);
+      if (config.budget && info.traits.memoryKnob &&
+          !variant.params.contains(info.traits.memoryKnob->parameter)) {
+        const MemoryKnob& knob = *info.traits.memoryKnob;
+        const nlohmann::json* done = store.find(prefix + "bake");
+        if (done && done->contains("budget")) {
+          budgetRecord = (*done)["budget"];
+        } else {
+          spdlog::info("{} on {}: searching {} for the budget", variant.label, treeLabel,
+                       knob.parameter);
+          budgetRecord = searchBudget(
+              *config.budget, knob, variant, tree, device, config.seed, photograph,
+              [&](Method& method) {
+                double sum = 0.0;
+                for (const EvalView& view : views) {
+                  sum += compareImages(referenceImage(view),
+                                       harness.display(harness.renderLinearAt(
+                                           method, view.camera, view.width, view.height)))
+                             .psnr;
+                }
+                return views.empty() ? 0.0 : sum / double(views.size());
+              });
+        }
+        effective.params[knob.parameter] = budgetRecord["value"];
+      }
       spdlog::info("{} on {}: baking", variant.label, treeLabel);
       BakedMethod baked = bakeMethod(
-          variant, tree, device, config.seed,
+          effective, tree, device, config.seed,
           options.outDirectory / "assets" / safeName(treeLabel) / safeName(variant.label),
           // The asset (and its disk_bytes) matters only for the bake record; a resumed run that
           // already has it re-bakes to render, but does not write the asset again.
@@ -288,6 +383,7 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
         nlohmann::json record = common;
         record.update(baked.record);
         record["gl_renderer"] = renderer;
+        if (!budgetRecord.is_null()) record["budget"] = budgetRecord;
         store.append(record, prefix + "bake");
       }
       {
@@ -351,6 +447,48 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
           store.append(record, prefix + fmt::format("forest|{}", size));
           progress.advance();
         }
+      }
+      // Popping: a dolly from close to far and an orbit, frame by frame against the reference.
+      for (const std::string& pathName :
+           tree.captures ? std::vector<std::string>{} : pendingPaths) {
+        const PoppingSettings& popping = config.popping;
+        const float fov = config.views.render.fovYDegrees;
+        const std::vector<PathFrame> path = pathName == "dolly"
+                                                ? dollyPath(tree.bounds, popping, fov)
+                                                : orbitPath(tree.bounds, popping, fov);
+        auto [cached, inserted] = referencePaths.try_emplace(pathName);
+        if (inserted) {
+          ensureReference();
+          std::vector<uint64_t> ignored;
+          cached->second =
+              renderPath(harness, *reference->method, path, popping.width, popping.height, ignored);
+        }
+        std::vector<uint64_t> signatures;
+        const std::vector<ImageRgba8> frames =
+            renderPath(harness, *baked.method, path, popping.width, popping.height, signatures);
+        const TemporalMetrics metrics = temporalMetrics(frames, cached->second, signatures);
+        std::vector<float> distances;
+        for (const PathFrame& frame : path) distances.push_back(frame.distance);
+        nlohmann::json record = common;
+        record.update({{"kind", "popping"},
+                       {"params", params},
+                       {"path", pathName},
+                       {"resolution", {popping.width, popping.height}},
+                       {"distance", distances},
+                       {"psnr_frame", metrics.psnr},
+                       {"change", metrics.change},
+                       {"reference_change", metrics.referenceChange},
+                       {"temporal_excess", metrics.excess},
+                       {"lod_switch", metrics.lodSwitch},
+                       {"peak_excess", metrics.peakExcess},
+                       {"mean_excess", metrics.meanExcess},
+                       {"switches", metrics.switches}});
+        store.append(record, prefix + "popping|" + pathName);
+        spdlog::info(
+            "{} on {}: popping along the {}: peak {:.2f}, mean {:.2f} (8-bit RMS), {} LoD "
+            "switches",
+            variant.label, treeLabel, pathName, metrics.peakExcess, metrics.meanExcess,
+            metrics.switches);
       }
     }
   }

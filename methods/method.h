@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -104,6 +105,9 @@ class Method {
   // Facts about the baked representation worth a table column (cluster counts, fit errors,
   // texture sizes); added to the bake record as "report".
   virtual nlohmann::json bakeReport() const { return nlohmann::json::object(); }
+  // Changes exactly when a draw picks different levels of detail than the draw before (0 for
+  // methods without any): the popping metric marks those frames.
+  virtual uint64_t lodSignature() const { return 0; }
   // The baked representation, so bake and render can run apart.
   virtual void save(AssetFolder& asset) const = 0;
   virtual void load(AssetFolder& asset) = 0;
@@ -114,11 +118,26 @@ class Method {
 using MethodFactory = std::function<std::unique_ptr<Method>(const nlohmann::json& params,
                                                             const std::string& configPath)>;
 
+// The parameter that sets a method's resolution, and so its memory: what an equal-memory
+// comparison ("budget") turns by bisection.
+struct MemoryKnob {
+  std::string parameter;
+  double lo = 0.0, hi = 0.0;  // the range the bisection searches
+  bool integer = false;
+  bool memoryGrows = true;  // memory grows with the value (false: it shrinks, e.g. a cell size)
+};
+
+// What the runner needs to know about a method besides how to make it.
+struct MethodTraits {
+  bool needsMesh = true;  // false: bakes from images alone, so it also runs on capture folders
+  std::optional<MemoryKnob> memoryKnob;  // absent: the method has no resolution to turn
+};
+
 struct MethodInfo {
   std::string name;         // the config's "method" value
   std::string description;  // one line, for --list-methods and docs
   MethodFactory create;
-  bool needsMesh = true;  // false: bakes from images alone, so it also runs on capture folders
+  MethodTraits traits;
 };
 
 class MethodRegistry {
@@ -135,13 +154,13 @@ class MethodRegistry {
 // range-checked, unknown keys rejected). Each method's register function calls it once.
 template <typename MethodType, typename Params>
 void addMethod(MethodRegistry& registry, const std::string& name, std::string description,
-               bool needsMesh = true) {
+               MethodTraits traits = {}) {
   registry.add(
       {name, std::move(description),
        [name](const nlohmann::json& params, const std::string& path) -> std::unique_ptr<Method> {
          return std::make_unique<MethodType>(readParams<Params>(params, path, name));
        },
-       needsMesh});
+       std::move(traits)});
 }
 
 // The registry of every built-in method, filled by registry.cpp (one explicit call each).

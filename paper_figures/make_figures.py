@@ -1,7 +1,19 @@
 #!/usr/bin/env python3
-"""Figures from committed runs: for each results/<name>/summary.csv, writes
-paper_figures/<name>/fps_vs_trees.png, psnr_vs_distance.png and captions.md (config, commit,
-renderer). Reads only the CSV and meta.json that canopy-bench wrote."""
+"""Figures from benchmark runs. For each results/<name>/ with summary.csv and meta.json, writes
+paper_figures/<name>/:
+
+  fps_vs_trees.png      FPS vs forest size per method (log-log)
+  psnr_vs_distance.png  PSNR per distance ring
+  memory_vs_psnr.png    GPU memory vs PSNR with the Pareto front (less memory, more PSNR)
+  bake_time.png         bake time per method variant
+  comparison_grid.png   rows: views; columns: reference then each variant, each image above its
+                        per-pixel error heat map (with a scale bar)       [needs images/]
+  crops.png             close-ups of the nearest view, as the papers' Figs. 10 and 12 [images/]
+  popping.png           per-frame and temporal error along the dolly path   [popping.csv]
+  captions.md           what each figure shows, with the config, commit and renderer
+
+Reads only what canopy-bench wrote (CSV, JSON, PNG). Figures whose inputs are missing (images are
+not committed) are skipped with a note."""
 import csv
 import json
 import re
@@ -11,7 +23,9 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
+import matplotlib.image as mpimg  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
 
 
 def number(text):
@@ -31,6 +45,11 @@ def series(row, prefix):
     return sorted(points)
 
 
+def safe_name(label):
+    """The folder name canopy-bench gives a tree or variant label (runner.cpp safeName)."""
+    return re.sub(r"[^A-Za-z0-9_.=,-]", "_", label)
+
+
 def plot_per_tree(rows, trees, prefix, xlabel, ylabel, log_y, path):
     """One panel per tree, one line per method variant, x from the column suffix (log scale)."""
     fig, axes = plt.subplots(1, len(trees), figsize=(4.2 * len(trees), 3.6), squeeze=False)
@@ -46,10 +65,206 @@ def plot_per_tree(rows, trees, prefix, xlabel, ylabel, log_y, path):
         axis.set_ylabel(ylabel)
         axis.set_title(tree)
         axis.grid(True, which="both", alpha=0.3)
-        axis.legend(fontsize=7)
+        axis.legend(fontsize=6)
     fig.tight_layout()
     fig.savefig(path, dpi=150)
     plt.close(fig)
+
+
+def pareto_front(points):
+    """Points (memory, psnr, label) not dominated by one with less memory and more PSNR."""
+    front, best = [], -np.inf
+    for memory, psnr, label in sorted(points, key=lambda p: (p[0], -p[1])):
+        if psnr > best:
+            front.append((memory, psnr, label))
+            best = psnr
+    return front
+
+
+def plot_memory_vs_psnr(rows, trees, path):
+    fig, axes = plt.subplots(1, len(trees), figsize=(4.6 * len(trees), 3.8), squeeze=False)
+    for axis, tree in zip(axes[0], trees):
+        points = []
+        for row in rows:
+            memory, psnr = number(row.get("memory_total_mb")), number(row.get("psnr"))
+            # The reference scores the 100 dB cap against itself: not a point of the trade-off.
+            if row["tree"] != tree or memory is None or psnr is None or psnr >= 99.9:
+                continue
+            points.append((memory, psnr, row["variant"]))
+        for memory, psnr, label in points:
+            axis.scatter(memory, psnr, s=18)
+            axis.annotate(label, (memory, psnr), fontsize=5, xytext=(2, 2), textcoords="offset points")
+        front = pareto_front(points)
+        if front:
+            axis.step([p[0] for p in front], [p[1] for p in front], where="post", color="k",
+                      linewidth=1, label="Pareto front")
+            axis.legend(fontsize=6)
+        axis.set_xscale("log")
+        axis.set_xlabel("GPU memory (MB, ledger)")
+        axis.set_ylabel("PSNR (dB)")
+        axis.set_title(tree)
+        axis.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+
+
+def plot_bake_time(rows, path):
+    labels = [f"{r['tree']} · {r['variant']}" for r in rows if number(r.get("bake_s")) is not None]
+    values = [number(r["bake_s"]) for r in rows if number(r.get("bake_s")) is not None]
+    fig, axis = plt.subplots(figsize=(7, 0.22 * len(labels) + 1.2))
+    axis.barh(range(len(values)), values, color="tab:green")
+    axis.set_yticks(range(len(values)), labels, fontsize=6)
+    axis.invert_yaxis()
+    axis.set_xscale("log")
+    axis.set_xlabel("bake time (s, CPU + upload-free)")
+    axis.grid(True, axis="x", which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+
+
+def load_rgb(path):
+    image = mpimg.imread(path)
+    return image[..., :3].astype(np.float64)
+
+
+def pick_views(view_dir, count):
+    """Up to `count` view keys spread over the distance rings (nearest first)."""
+    keys = sorted(p.stem for p in view_dir.glob("*.png"))
+    def distance(key):
+        match = re.match(r"d([0-9.]+)_", key)
+        return float(match.group(1)) if match else 0.0
+    by_distance = {}
+    for key in keys:
+        by_distance.setdefault(distance(key), []).append(key)
+    chosen = []
+    for d in sorted(by_distance):
+        options = by_distance[d]
+        chosen.append(next((k for k in options if "_e30_" in k), options[len(options) // 2]))
+    return chosen[:count]
+
+
+def comparison_grid(run_dir, tree, variants, path, views=3):
+    """Each view: a row of images (reference, methods) and a row of error maps under them."""
+    tree_dir = run_dir / "images" / safe_name(tree)
+    reference_dir = tree_dir / "reference"
+    if not reference_dir.is_dir():
+        return False
+    variants = [v for v in variants if (tree_dir / safe_name(v)).is_dir()]
+    keys = pick_views(reference_dir, views)
+    if not keys or not variants:
+        return False
+    columns = 1 + len(variants)
+    fig, axes = plt.subplots(2 * len(keys), columns, figsize=(1.9 * columns, 3.8 * len(keys)),
+                             squeeze=False)
+    heat = None
+    for r, key in enumerate(keys):
+        reference = load_rgb(reference_dir / f"{key}.png")
+        axes[2 * r][0].imshow(reference)
+        axes[2 * r][0].set_title(f"reference\n{key}", fontsize=6)
+        axes[2 * r + 1][0].axis("off")
+        for c, variant in enumerate(variants, start=1):
+            image_path = tree_dir / safe_name(variant) / f"{key}.png"
+            if not image_path.exists():
+                axes[2 * r][c].axis("off")
+                axes[2 * r + 1][c].axis("off")
+                continue
+            image = load_rgb(image_path)
+            error = np.abs(image - reference).mean(axis=2)
+            mse = np.mean((image - reference) ** 2)
+            axes[2 * r][c].imshow(image)
+            axes[2 * r][c].set_title(f"{variant}\nframe PSNR {10 * np.log10(1 / max(mse, 1e-12)):.1f} dB",
+                                     fontsize=6)
+            heat = axes[2 * r + 1][c].imshow(error, cmap="inferno", vmin=0.0, vmax=0.5)
+        for axis in axes[2 * r]:
+            axis.set_xticks([]), axis.set_yticks([])
+        for axis in axes[2 * r + 1]:
+            axis.set_xticks([]), axis.set_yticks([])
+    if heat is not None:
+        bar = fig.colorbar(heat, ax=axes.ravel().tolist(), shrink=0.3, pad=0.01)
+        bar.set_label("mean |RGB error| (sRGB, 0–1)", fontsize=7)
+    fig.savefig(path, dpi=150, bbox_inches="tight")
+    plt.close(fig)
+    return True
+
+
+def crops(run_dir, tree, variants, path, size=128):
+    """The nearest view's centre region at full resolution, reference then each variant."""
+    tree_dir = run_dir / "images" / safe_name(tree)
+    reference_dir = tree_dir / "reference"
+    if not reference_dir.is_dir():
+        return False
+    keys = pick_views(reference_dir, 1)
+    variants = [v for v in variants if (tree_dir / safe_name(v) / f"{keys[0]}.png").exists()] if keys else []
+    if not variants:
+        return False
+    reference = load_rgb(reference_dir / f"{keys[0]}.png")
+    h, w = reference.shape[:2]
+    # Centre on the tree: the centroid of pixels that differ from the background corner.
+    mask = np.abs(reference - reference[0, 0]).sum(axis=2) > 0.02
+    ys, xs = np.nonzero(mask)
+    cy, cx = (int(ys.mean()), int(xs.mean())) if len(ys) else (h // 2, w // 2)
+    y0, x0 = np.clip(cy - size // 2, 0, h - size), np.clip(cx - size // 2, 0, w - size)
+    images = [("reference", reference)] + [(v, load_rgb(tree_dir / safe_name(v) / f"{keys[0]}.png"))
+                                          for v in variants]
+    fig, axes = plt.subplots(1, len(images), figsize=(2.2 * len(images), 2.5), squeeze=False)
+    for axis, (label, image) in zip(axes[0], images):
+        axis.imshow(image[y0:y0 + size, x0:x0 + size], interpolation="nearest")
+        axis.set_title(label, fontsize=6)
+        axis.set_xticks([]), axis.set_yticks([])
+    fig.suptitle(f"{tree}, view {keys[0]}, {size}×{size} px crop", fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return True
+
+
+def plot_popping(run_dir, path):
+    popping = run_dir / "popping.csv"
+    if not popping.exists():
+        return False
+    rows = list(csv.DictReader(popping.open()))
+    groups = {}
+    for row in rows:
+        groups.setdefault((row["tree"], row["variant"], row["path"]), []).append(row)
+    paths = sorted({key[2] for key in groups})
+    fig, axes = plt.subplots(2, len(paths), figsize=(5.5 * len(paths), 6), squeeze=False)
+    for column, path_name in enumerate(paths):
+        for (tree, variant, p), frames in sorted(groups.items()):
+            if p != path_name or variant == "polygonal":
+                continue
+            x = [number(f["distance"]) for f in frames]
+            label = f"{tree} · {variant}"
+            axes[0][column].plot(x, [number(f["psnr"]) for f in frames], label=label, linewidth=1)
+            line, = axes[1][column].plot(x, [number(f["temporal_excess"]) for f in frames], label=label,
+                                         linewidth=1)
+            switches = [xi for xi, f in zip(x, frames) if f.get("lod_switch") == "1"]
+            axes[1][column].scatter(switches, [0] * len(switches), marker="|", color=line.get_color(), s=60)
+        axes[0][column].set_title(f"{path_name} path")
+        axes[0][column].set_ylabel("PSNR vs reference (dB)")
+        axes[1][column].set_ylabel("temporal error − reference's")
+        for axis in axes[:, column]:
+            axis.set_xlabel("camera distance (bounding radii)")
+            axis.grid(True, alpha=0.3)
+            axis.legend(fontsize=6)
+    fig.tight_layout()
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return True
+
+
+def sweep_groups(variants):
+    """Variants grouped by the parameter names in their labels ("m[cutoff=0.9]" -> "cutoff"), so an
+    ablation gets one crop row per swept parameter (the papers' side-by-side comparisons)."""
+    groups = {}
+    for variant in variants:
+        match = re.search(r"\[(.*)\]$", variant)
+        if not match:
+            continue
+        keys = ",".join(sorted(part.split("=")[0] for part in match.group(1).split(",")))
+        groups.setdefault(keys, []).append(variant)
+    return {k: v for k, v in groups.items() if len(v) > 1}
 
 
 def make_figures(run_dir: Path, out_root: Path):
@@ -63,29 +278,59 @@ def make_figures(run_dir: Path, out_root: Path):
     out.mkdir(parents=True, exist_ok=True)
     renderer = meta.get("gl", {}).get("renderer", "unknown")
     trees = sorted({row["tree"] for row in rows})
+    made = []
 
     plot_per_tree(rows, trees, "fps_n", "trees in the forest", "FPS (median frame time)", True,
                   out / "fps_vs_trees.png")
+    made.append("- `fps_vs_trees.png`: FPS = 1000 / median frame time along the forest orbit, log-log.")
     plot_per_tree(rows, trees, "psnr_d", "camera distance (bounding radii)", "PSNR over coverage union (dB)",
                   False, out / "psnr_vs_distance.png")
+    made.append("- `psnr_vs_distance.png`: mean PSNR over the views of each distance ring "
+                "(polygonal against itself is at the 100 dB cap).")
+    plot_memory_vs_psnr(rows, trees, out / "memory_vs_psnr.png")
+    made.append("- `memory_vs_psnr.png`: GPU memory (ledger) against mean PSNR per variant; the step line "
+                "is the Pareto front (no other variant has less memory and more PSNR).")
+    plot_bake_time(rows, out / "bake_time.png")
+    made.append("- `bake_time.png`: bake time per tree and variant (log scale).")
+    variants = [v for v in dict.fromkeys(r["variant"] for r in rows) if v != "polygonal"]
+    for tree in trees:
+        tree_variants = [r["variant"] for r in rows if r["tree"] == tree and r["variant"] in variants]
+        name = f"comparison_grid_{safe_name(tree)}.png"
+        if comparison_grid(run_dir, tree, tree_variants, out / name):
+            made.append(f"- `{name}`: rows of views (one per distance ring), the reference then each "
+                        "variant; under each image its per-pixel mean absolute sRGB error (colour bar).")
+        name = f"crops_{safe_name(tree)}.png"
+        if crops(run_dir, tree, tree_variants, out / name):
+            made.append(f"- `{name}`: 128×128-pixel close-ups of the nearest view at full resolution.")
+        for keys, group in sweep_groups(tree_variants).items():
+            name = f"crops_{safe_name(tree)}_{safe_name(keys)}.png"
+            if crops(run_dir, tree, group, out / name):
+                made.append(f"- `{name}`: the same close-up across the `{keys}` sweep.")
+    if plot_popping(run_dir, out / "popping.png"):
+        made.append("- `popping.png`: along the dolly (close to far) and orbit paths, per-frame PSNR against "
+                    "the reference and the temporal error in excess of the reference's; ticks mark frames "
+                    "where the method switched level of detail.")
+    if not (run_dir / "images").is_dir():
+        made.append("- (image figures skipped: the run's images/ folder is not present)")
 
     caption = (
         f"# Figures of run `{run_dir.name}`\n\n"
         f"Config `{meta.get('experiment')}` (hash `{meta.get('config_hash')}`), commit `{meta.get('git_commit')}`, "
         f"renderer `{renderer}` ({meta.get('gl', {}).get('backend')}), CPU `{meta.get('cpu')}`.\n\n"
-        "- `fps_vs_trees.png`: FPS = 1000 / median frame time along the forest orbit, log-log.\n"
-        "- `psnr_vs_distance.png`: mean PSNR over the views of each distance ring "
-        "(polygonal against itself is at the 100 dB cap).\n"
+        + "\n".join(made) + "\n"
     )
     (out / "captions.md").write_text(caption)
-    print(f"{out}: fps_vs_trees.png, psnr_vs_distance.png, captions.md")
+    print(f"{out}: {len(made)} figure(s)")
     return True
 
 
 def main():
     results = Path(sys.argv[1] if len(sys.argv) > 1 else "results")
-    out_root = Path(__file__).resolve().parent
-    made = [make_figures(run, out_root) for run in sorted(p for p in results.iterdir() if p.is_dir())]
+    out_root = Path(sys.argv[2]) if len(sys.argv) > 2 else Path(__file__).resolve().parent
+    runs = sorted(p for p in results.iterdir() if p.is_dir()) if results.is_dir() else []
+    if (results / "summary.csv").exists():
+        runs = [results]
+    made = [make_figures(run, out_root) for run in runs]
     if not any(made):
         print(f"no runs with summary.csv and meta.json under {results}", file=sys.stderr)
         return 2

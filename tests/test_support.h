@@ -44,6 +44,11 @@ inline void writeText(const std::filesystem::path& path, const std::string& text
   std::ofstream(path, std::ios::binary) << text;
 }
 
+inline std::string readText(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
 // A small built-in tree so tests stay fast: the sparse preset with `leaves` leaves.
 inline Tree smallTree(int leaves = 400, uint64_t seed = 7) {
   LSystemTreeParams params = treePreset("sparse");

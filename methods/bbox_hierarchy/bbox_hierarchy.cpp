@@ -12,6 +12,7 @@
 #include "common/config.h"
 #include "methods/bbox_hierarchy/box_hierarchy.h"
 #include "methods/common/leaf_capture.h"
+#include "methods/common/lod_instances.h"
 #include "methods/common/mesh.h"
 #include "methods/common/mipmaps.h"
 
@@ -246,6 +247,9 @@ class BboxHierarchy final : public Method {
       matrices.insert(matrices.end(), leafLists[n].begin(), leafLists[n].end());
     }
     uploadMatrices(matrices);
+    mSignature = 0xcbf29ce484222325ull;
+    for (size_t n = 0; n < boxLists.size(); ++n)
+      if (!boxLists[n].empty()) mSignature = fnv1aMix(fnv1aMix(mSignature, n), boxLists[n].size());
     const gl::Api& g = gl::api();
     mProgram.use();
     setFrameUniforms(mProgram, frame);
@@ -286,6 +290,7 @@ class BboxHierarchy final : public Method {
       mWood.draw(frame, frame.instanceBuffer, 0, static_cast<GLsizei>(instances.size()));
   }
 
+  uint64_t lodSignature() const override { return mSignature; }
   nlohmann::json effectiveParams() const override { return writeParams(mParams); }
   nlohmann::json bakeReport() const override { return mReport; }
 
@@ -438,6 +443,7 @@ class BboxHierarchy final : public Method {
   std::vector<int32_t> mTextured;
   std::vector<uint32_t> mBoxFirstIndex;
   std::vector<float> mWorldPerTexel;
+  uint64_t mSignature = 0;  // of the boxes the last draw showed as images (popping metric)
   uint32_t mLeafFirstIndex = 0;
   std::vector<MeshVertex> mVertices;
   std::vector<uint32_t> mIndices;
@@ -459,7 +465,8 @@ class BboxHierarchy final : public Method {
 void registerBboxHierarchy(MethodRegistry& registry) {
   addMethod<BboxHierarchy, BboxParams>(
       registry, "bbox_hierarchy",
-      "bounding-box hierarchy of six images per box (Lluch et al. 2004)");
+      "bounding-box hierarchy of six images per box (Lluch et al. 2004)",
+      {.memoryKnob = MemoryKnob{"texture_size", 8, 512, true, true}});
 }
 
 }  // namespace canopy

@@ -126,6 +126,7 @@ class BillboardCloudMethod final : public Method {
       mWood.draw(frame, frame.instanceBuffer, 0, static_cast<GLsizei>(instances.size()));
   }
 
+  uint64_t lodSignature() const override { return mLod.signature(); }
   nlohmann::json effectiveParams() const override { return writeParams(mParams); }
   nlohmann::json bakeReport() const override { return mReport; }
 
@@ -173,7 +174,8 @@ class BillboardCloudMethod final : public Method {
 void registerBillboardCloud(MethodRegistry& registry) {
   addMethod<BillboardCloudMethod, BillboardCloudParams>(
       registry, "billboard_cloud",
-      "classic billboard cloud: one orthographic leaf texture per billboard");
+      "classic billboard cloud: one orthographic leaf texture per billboard",
+      {.memoryKnob = MemoryKnob{"density", 2, 512, false, true}});
 }
 
 }  // namespace canopy

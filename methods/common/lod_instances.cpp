@@ -23,6 +23,7 @@ void LodInstances::update(const FrameContext& frame, std::span<const Instance> i
   const int levels = static_cast<int>(thresholds.size()) + 1;
   const float radius = 0.5f * glm::length(treeBounds.extent());
   std::vector<std::vector<glm::mat4>> byLevel(levels);
+  mSignature = 0xcbf29ce484222325ull;
   for (const Instance& instance : instances) {
     const glm::mat4 model = instance.modelMatrix();
     int level = frame.forcedLevel;
@@ -32,6 +33,7 @@ void LodInstances::update(const FrameContext& frame, std::span<const Instance> i
                        thresholds);
     }
     byLevel[std::min(level, levels - 1)].push_back(model);
+    mSignature = fnv1aMix(mSignature, uint64_t(std::min(level, levels - 1)));
   }
   mMatrices.clear();
   mRanges.assign(levels, Range{});

@@ -27,6 +27,8 @@ class LodInstances {
   void update(const FrameContext& frame, std::span<const Instance> instances,
               const Aabb& treeBounds, const std::vector<float>& thresholds);
   GLuint buffer() const { return mBuffer.id(); }
+  // A hash of every instance's level in the last update: changes when any instance switched.
+  uint64_t signature() const { return mSignature; }
   const std::vector<Range>& ranges() const { return mRanges; }
 
   // The level one instance at `distanceInRadii` gets.
@@ -39,6 +41,16 @@ class LodInstances {
   size_t mCapacity = 0;
   std::vector<Range> mRanges;
   std::vector<glm::mat4> mMatrices;
+  uint64_t mSignature = 0;
 };
+
+// FNV-1a step over one 64-bit value: the LoD signatures' hash.
+inline uint64_t fnv1aMix(uint64_t hash, uint64_t value) {
+  for (int byte = 0; byte < 8; ++byte) {
+    hash ^= (value >> (8 * byte)) & 0xffu;
+    hash *= 0x100000001b3ull;
+  }
+  return hash;
+}
 
 }  // namespace canopy

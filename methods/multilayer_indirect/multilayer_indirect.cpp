@@ -229,6 +229,7 @@ class MultilayerIndirect final : public Method {
       mWood.draw(frame, frame.instanceBuffer, 0, static_cast<GLsizei>(instances.size()));
   }
 
+  uint64_t lodSignature() const override { return mLod.signature(); }
   nlohmann::json effectiveParams() const override { return writeParams(mParams); }
   nlohmann::json bakeReport() const override { return mReport; }
 
@@ -384,7 +385,8 @@ class MultilayerIndirect final : public Method {
 void registerMultilayerIndirect(MethodRegistry& registry) {
   addMethod<MultilayerIndirect, MultilayerParams>(
       registry, "multilayer_indirect",
-      "multi-layer indirect texturing (García et al. 2007): lists of leaf fragments per hash cell");
+      "multi-layer indirect texturing (García et al. 2007): lists of leaf fragments per hash cell",
+      {.memoryKnob = MemoryKnob{"hash_resolution", 4, 256, true, true}});
 }
 
 }  // namespace canopy

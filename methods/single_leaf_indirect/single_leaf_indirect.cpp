@@ -172,6 +172,7 @@ class SingleLeafIndirect final : public Method {
       mWood.draw(frame, frame.instanceBuffer, 0, static_cast<GLsizei>(instances.size()));
   }
 
+  uint64_t lodSignature() const override { return mLod.signature(); }
   nlohmann::json effectiveParams() const override { return writeParams(mParams); }
   nlohmann::json bakeReport() const override { return mReport; }
 
@@ -236,7 +237,8 @@ class SingleLeafIndirect final : public Method {
 void registerSingleLeafIndirect(MethodRegistry& registry) {
   addMethod<SingleLeafIndirect, SingleLeafParams>(
       registry, "single_leaf_indirect",
-      "one leaf image per billboard grid cell (García et al. 2005)");
+      "one leaf image per billboard grid cell (García et al. 2005)",
+      {.memoryKnob = MemoryKnob{"cell_size", 0.25, 8, false, false}});
 }
 
 }  // namespace canopy

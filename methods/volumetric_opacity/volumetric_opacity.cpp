@@ -379,7 +379,7 @@ void registerVolumetricOpacity(MethodRegistry& registry) {
       registry, "volumetric_opacity",
       "volumetric opacity reconstruction with view-dependent billboards (Reche-Martinez, Martin, "
       "Drettakis 2004)",
-      /*needsMesh=*/false);
+      {.needsMesh = false, .memoryKnob = MemoryKnob{"texels", 2, 8, true, true}});
 }
 
 }  // namespace canopy

@@ -269,6 +269,60 @@ TEST(BenchCli, CaptureFolderTreesAreScoredOnTheirHeldOutViews) {
   EXPECT_NE(error.find("nowhere"), std::string::npos) << error;
 }
 
+TEST(BenchCli, BudgetSetsTheMemoryKnobAndPoppingRecordsEveryFrame) {
+  test::TempDir dir;
+  test::writeText(dir / "budget.json", R"({"name": "budget",
+    "trees": [{"preset": "sparse", "seed": 3, "leaves": 300}],
+    "methods": [{"method": "polygonal"},
+                {"method": "bbox_hierarchy", "params": {"min_box_leaves": 150}}],
+    "views": {"resolution": [64, 64], "distances": [2, 6], "elevations": [0], "azimuths": 2},
+    "forests": {"sizes": [1], "frames": 2, "warmup": 1},
+    "budget": {"memory_mb": 3.0},
+    "popping": {"frames": 12, "near": 1.5, "far": 40, "resolution": [64, 64]}})");
+  const std::string command = kBench + " --quiet --no-images --config " +
+                              (dir / "budget.json").string() + " --out " + (dir / "out").string();
+  ASSERT_EQ(test::runCommand(command), 0);
+  int poppingRecords = 0;
+  for (const auto& record : ResultsStore::readRecords(dir / "out" / "metrics.jsonl")) {
+    const std::string kind = record.at("kind");
+    if (kind == "bake" && record.at("method") == "bbox_hierarchy") {
+      const auto& budget = record.at("budget");
+      EXPECT_EQ(budget.at("parameter"), "texture_size");
+      EXPECT_TRUE(budget.at("reached").get<bool>());
+      const double memory = record.at("memory_bytes").at("total").get<double>() / 1e6;
+      EXPECT_NEAR(memory, 3.0, 0.15) << "within 5 % of the budget";
+      EXPECT_EQ(record.at("params").at("texture_size"), budget.at("value"));
+    }
+    if (kind == "bake" && record.at("method") == "polygonal") {
+      EXPECT_FALSE(record.contains("budget")) << "the reference has no knob";
+    }
+    if (kind == "popping") {
+      ++poppingRecords;
+      EXPECT_EQ(record.at("distance").size(), 12u);
+      EXPECT_EQ(record.at("temporal_excess").size(), 12u);
+      if (record.at("method") == "polygonal") {
+        EXPECT_EQ(record.at("peak_excess").get<double>(), 0.0) << "the reference against itself";
+      }
+    }
+  }
+  EXPECT_EQ(poppingRecords, 4);  // 2 variants × dolly and orbit
+  const std::string csv = test::readText(dir / "out" / "popping.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 4 * 12);
+  // A rerun finds everything done: no search, no new records.
+  const auto before = keysOf(dir / "out" / "metrics.jsonl");
+  ASSERT_EQ(test::runCommand(command), 0);
+  EXPECT_EQ(keysOf(dir / "out" / "metrics.jsonl"), before);
+  // A budget needs exactly one target.
+  test::writeText(dir / "bad.json",
+                  R"({"name": "bad", "budget": {"memory_mb": 2, "psnr_db": 30}})");
+  std::string error;
+  EXPECT_EQ(test::runCommand(kBench + " --quiet --config " + (dir / "bad.json").string() +
+                                 " --out " + (dir / "bad").string(),
+                             &error),
+            2);
+  EXPECT_NE(error.find("budget"), std::string::npos) << error;
+}
+
 TEST(Report, LatexTableHasOneCellPerColumnAndEscapesNames) {
   std::vector<nlohmann::json> records = {
       {{"kind", "bake"},

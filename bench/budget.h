@@ -1,0 +1,40 @@
+#pragma once
+
+#include <functional>
+#include <vector>
+
+#include "methods/method.h"
+
+namespace canopy {
+
+// Config "budget": {"memory_mb": X} sets each method's memory knob so its ledger memory is within
+// `tolerance` of X (the multi-layer paper's Fig. 13 protocol); {"psnr_db": Y} finds the least
+// memory whose mean PSNR over the config's views reaches Y.
+struct BudgetSettings {
+  double memoryMb = 0.0;    // > 0: equal-memory mode
+  double psnrDb = 0.0;      // > 0: PSNR-target mode
+  double tolerance = 0.05;  // relative, for memory
+  int maxSteps = 12;        // bakes per method at most
+};
+
+struct KnobSearch {
+  double value = 0.0;                            // the knob value chosen
+  double measured = 0.0;                         // what the measure gave there
+  int steps = 0;                                 // evaluations made
+  bool reached = false;                          // memory within tolerance / PSNR target met
+  std::vector<std::pair<double, double>> trace;  // (value, measured) in evaluation order
+};
+
+// Bisection (geometric for continuous knobs, so resolutions halve) for the value whose
+// `measure` is within `tolerance` (relative) of `target`, assuming `measure` grows with the
+// value when knob.memoryGrows and shrinks otherwise. When the target lies outside the range the
+// nearer end is returned with reached = false.
+KnobSearch bisectToTarget(const MemoryKnob& knob, double target, double tolerance,
+                          const std::function<double(double)>& measure, int maxSteps);
+
+// The value giving the least memory whose `quality` reaches `target` (quality assumed to grow
+// with memory). reached = false when even the most memory does not reach it.
+KnobSearch leastMemoryReaching(const MemoryKnob& knob, double target,
+                               const std::function<double(double)>& quality, int maxSteps);
+
+}  // namespace canopy
