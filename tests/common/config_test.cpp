@@ -70,3 +70,25 @@ TEST(Config, DefaultsAreDesignDefaults) {
 
 }  // namespace
 }  // namespace canopy
+
+namespace canopy {
+namespace {
+
+// Every committed config parses and validates (names, keys, ranges, method parameters), so a
+// researcher running one never loses a long run to a typo found at the end.
+TEST(Config, EveryCommittedConfigParses) {
+  int configs = 0;
+  for (const auto& entry :
+       std::filesystem::directory_iterator(std::filesystem::path(CANOPY_SOURCE_DIR) / "configs")) {
+    if (entry.path().extension() != ".json") continue;
+    ++configs;
+    EXPECT_NO_THROW({
+      const ExperimentConfig config = readExperimentConfig(entry.path().string());
+      EXPECT_EQ(config.name, entry.path().stem().string()) << "results/<name> matches the file";
+    }) << entry.path();
+  }
+  EXPECT_GE(configs, 10);
+}
+
+}  // namespace
+}  // namespace canopy
