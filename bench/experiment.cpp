@@ -1,5 +1,6 @@
 #include "bench/experiment.h"
 
+#include <cmath>
 #include <filesystem>
 #include <regex>
 #include <set>
@@ -129,7 +130,40 @@ ViewSettings parseViews(ConfigObject& config) {
   return views;
 }
 
-ForestSettings parseForests(ConfigObject& config, const RenderSettings& render) {
+// A camera path recorded by canopy-view: {"frames": [{"position", "target", "up", "fov_deg"}]}.
+std::vector<Camera> readCameraPath(const std::string& path) {
+  const nlohmann::json json = readJsonFile(path);
+  std::vector<Camera> cameras;
+  try {
+    for (const auto& frame : json.at("frames")) {
+      Camera c;
+      const auto vec = [&](const char* key) {
+        const auto& v = frame.at(key);
+        return glm::vec3(v.at(0).get<float>(), v.at(1).get<float>(), v.at(2).get<float>());
+      };
+      c.position = vec("position");
+      c.target = vec("target");
+      c.up = vec("up");
+      c.fovYDegrees = frame.at("fov_deg").get<float>();
+      if (!std::isfinite(c.fovYDegrees) || c.fovYDegrees <= 1.0f || c.fovYDegrees >= 170.0f ||
+          c.position == c.target)
+        throwInputError("{}: frame {} is not a valid camera", path, cameras.size());
+      cameras.push_back(c);
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throwInputError("{}: not a camera path ({})", path, e.what());
+  }
+  if (cameras.empty()) throwInputError("{}: a camera path needs frames", path);
+  // Near/far planes from the path itself: the forest lies within it.
+  for (Camera& c : cameras) {
+    c.nearPlane = 0.05f;
+    c.farPlane = 5000.0f;
+  }
+  return cameras;
+}
+
+ForestSettings parseForests(ConfigObject& config, const RenderSettings& render,
+                            const std::string& baseDirectory) {
   ForestSettings forests;
   forests.width = render.width;
   forests.height = render.height;
@@ -137,6 +171,12 @@ ForestSettings parseForests(ConfigObject& config, const RenderSettings& render) 
   forests.frames = readNumber<int>(config, "frames", forests.frames, 1, 100'000);
   forests.warmup = readNumber<int>(config, "warmup", forests.warmup, 0, 100'000);
   readResolution(config, forests.width, forests.height);
+  if (config.has("camera_path")) {
+    std::filesystem::path path = config.get<std::string>("camera_path");
+    if (path.is_relative() && !std::filesystem::exists(path) && !baseDirectory.empty())
+      path = std::filesystem::path(baseDirectory) / path;
+    forests.cameraPath = readCameraPath(path.string());
+  }
   config.finish("forests");
   return forests;
 }
@@ -229,7 +269,7 @@ ExperimentConfig parseExperimentConfig(const nlohmann::json& json,
   }
   if (config.has("forests")) {
     ConfigObject forests = config.child("forests");
-    experiment.forests = parseForests(forests, experiment.views.render);
+    experiment.forests = parseForests(forests, experiment.views.render, baseDirectory);
   } else {
     experiment.forests.width = experiment.views.render.width;
     experiment.forests.height = experiment.views.render.height;

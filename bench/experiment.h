@@ -34,6 +34,7 @@ struct ForestSettings {
   int warmup = 10;
   int width = 512;
   int height = 512;
+  std::vector<Camera> cameraPath;  // "camera_path": a recorded path replayed instead of the orbit
 };
 
 struct ExperimentConfig {

@@ -43,13 +43,14 @@ void Harness::uploadInstances(const std::vector<Instance>& instances) {
 
 FrameContext Harness::makeFrame(const Camera& camera, int width, int height,
                                 GLuint instances) const {
+  // Settings may have changed since construction (the viewer): keep the light a unit vector.
   FrameContext frame;
   frame.view = camera.view();
   frame.projection = camera.projection(float(width) / float(height));
   frame.cameraPosition = camera.position;
   frame.viewportSize = {width, height};
   frame.shading = mSettings.shading;
-  frame.lightDirection = mSettings.lightDirection;
+  frame.lightDirection = glm::normalize(mSettings.lightDirection);
   frame.ambient = mSettings.ambient;
   frame.instanceBuffer = instances;
   return frame;
@@ -121,7 +122,7 @@ FrameTimes summarizeFrameTimes(std::vector<double> milliseconds) {
 
 FrameTimes Harness::timeForest(Method& method, const std::vector<Instance>& forest,
                                const Aabb& treeBounds, int frames, int warmup, int width,
-                               int height) {
+                               int height, const std::vector<Camera>& path) {
   gl::RenderTarget& target = targetOfSize(width, height);
   uploadInstances(forest);
   const gl::Api& g = gl::api();
@@ -130,7 +131,8 @@ FrameTimes Harness::timeForest(Method& method, const std::vector<Instance>& fore
   for (int i = 0; i < warmup + frames; ++i) {
     const int pathFrame = i < warmup ? i : i - warmup;
     const Camera camera =
-        forestCamera(forest, treeBounds, pathFrame, frames, mSettings.fovYDegrees);
+        path.empty() ? forestCamera(forest, treeBounds, pathFrame, frames, mSettings.fovYDegrees)
+                     : path[size_t(i) % path.size()];
     const auto start = std::chrono::steady_clock::now();
     beginFrame(target);
     method.draw(makeFrame(camera, width, height, mInstances.id()), std::span(mUploadedInstances));

@@ -36,6 +36,12 @@ class Harness {
   Harness(gl::Device& device, RenderSettings settings);
 
   const RenderSettings& settings() const { return mSettings; }
+  RenderSettings& settings() { return mSettings; }  // the viewer changes shading live
+
+  // The frame every draw gets, and the GL state every method starts from, bound to `target`:
+  // what renderLinear and timeForest use, for callers that draw into their own targets.
+  FrameContext makeFrame(const Camera& camera, int width, int height, GLuint instances) const;
+  void beginFrame(const gl::RenderTarget& target);
 
   // One tree at the origin seen by `camera`: the supersampled render box-filtered to the
   // evaluation resolution (linear, premultiplied; alpha is coverage).
@@ -50,8 +56,10 @@ class Harness {
 
   // Frame times of the forest seen along the benchmark's camera path, glFinish after each frame,
   // after `warmup` unmeasured frames, at width × height without supersampling.
+  // A non-empty `path` replaces the orbit: frame i looks from path[i % path.size()].
   FrameTimes timeForest(Method& method, const std::vector<Instance>& forest, const Aabb& treeBounds,
-                        int frames, int warmup, int width, int height);
+                        int frames, int warmup, int width, int height,
+                        const std::vector<Camera>& path = {});
 
   // A frame of a forest as an image (for checks and figures).
   ImageRgba8 renderForestFrame(Method& method, const std::vector<Instance>& forest,
@@ -59,10 +67,8 @@ class Harness {
                                int height);
 
  private:
-  FrameContext makeFrame(const Camera& camera, int width, int height, GLuint instances) const;
   gl::RenderTarget& targetOfSize(int width, int height);
   void uploadInstances(const std::vector<Instance>& instances);
-  void beginFrame(const gl::RenderTarget& target);
 
   gl::Device& mDevice;
   RenderSettings mSettings;

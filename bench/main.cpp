@@ -9,7 +9,10 @@
 #include "bench/capture_export.h"
 #include "bench/experiment.h"
 #include "bench/merge.h"
+#include "bench/report.h"
+#include "bench/results_store.h"
 #include "bench/runner.h"
+#include "common/config.h"
 #include "common/error.h"
 #include "common/progress.h"
 #include "common/tree_export.h"
@@ -54,6 +57,11 @@ int main(int argc, char** argv) {
   exportCapturesCommand->add_option("--distance", captureOptions.distance,
                                     "camera distance in bounding radii");
   exportCapturesCommand->add_option("--out", captureOut, "output folder")->required();
+  // canopy-bench report RUN... : rewrites summaries (md, csv, tex, popping.csv) from metrics.jsonl
+  CLI::App* report =
+      app.add_subcommand("report", "rewrite a run's summaries from its metrics.jsonl");
+  std::vector<std::string> reportRuns;
+  report->add_option("runs", reportRuns, "run folders")->required();
   // canopy-bench merge OUT RUN... : joins shard outputs
   CLI::App* merge = app.add_subcommand("merge", "join shard outputs into one run folder");
   std::string mergeOut;
@@ -97,6 +105,19 @@ int main(int argc, char** argv) {
       spec.leaves = captureLeaves;
       exportCaptures(loadTree(spec), captureOut, captureOptions, gl::parseBackend(backend));
       std::printf("%s\n", captureOut.c_str());
+      return kExitOk;
+    }
+    if (*report) {
+      for (const std::string& run : reportRuns) {
+        const std::filesystem::path folder(run);
+        if (!std::filesystem::exists(folder / "metrics.jsonl"))
+          throwInputError("{}: no metrics.jsonl (not a run folder)", run);
+        const nlohmann::json meta = readJsonFile((folder / "meta.json").string());
+        writeSummaries(folder, ResultsStore::readRecords(folder / "metrics.jsonl"),
+                       meta.value("experiment", folder.filename().string()),
+                       meta.value("gl", nlohmann::json::object()).value("renderer", "unknown"));
+        std::printf("%s\n", run.c_str());
+      }
       return kExitOk;
     }
     if (*merge) {

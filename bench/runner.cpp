@@ -303,7 +303,8 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
       if (inserted) {
         it->second =
             harness.timeForest(*reference->method, forest(size), tree.bounds, config.forests.frames,
-                               config.forests.warmup, config.forests.width, config.forests.height);
+                               config.forests.warmup, config.forests.width, config.forests.height,
+                               config.forests.cameraPath);
       }
       return &it->second;
     };
@@ -426,7 +427,8 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
               isReference ? *polygonal
                           : harness.timeForest(*baked.method, forest(size), tree.bounds,
                                                config.forests.frames, config.forests.warmup,
-                                               config.forests.width, config.forests.height);
+                                               config.forests.width, config.forests.height,
+                                               config.forests.cameraPath);
           nlohmann::json record = common;
           record.update({{"kind", "forest"},
                          {"params", params},

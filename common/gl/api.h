@@ -107,6 +107,14 @@ namespace canopy::gl {
   X(PFNGLDRAWELEMENTSPROC, DrawElements)                                       \
   X(PFNGLDRAWARRAYSINSTANCEDPROC, DrawArraysInstanced)                         \
   X(PFNGLDRAWELEMENTSINSTANCEDPROC, DrawElementsInstanced)                     \
+  X(PFNGLDRAWELEMENTSBASEVERTEXPROC, DrawElementsBaseVertex)                   \
+  X(PFNGLBINDSAMPLERPROC, BindSampler)                                         \
+  X(PFNGLBLENDEQUATIONPROC, BlendEquation)                                     \
+  X(PFNGLBLENDEQUATIONSEPARATEPROC, BlendEquationSeparate)                     \
+  X(PFNGLCLIPCONTROLPROC, ClipControl)                                         \
+  X(PFNGLDETACHSHADERPROC, DetachShader)                                       \
+  X(PFNGLGETATTRIBLOCATIONPROC, GetAttribLocation)                             \
+  X(PFNGLISENABLEDPROC, IsEnabled)                                             \
   X(PFNGLDRAWELEMENTSINSTANCEDBASEVERTEXPROC, DrawElementsInstancedBaseVertex) \
   X(PFNGLGENQUERIESPROC, GenQueries)                                           \
   X(PFNGLDELETEQUERIESPROC, DeleteQueries)                                     \

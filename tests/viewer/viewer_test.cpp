@@ -1,0 +1,86 @@
+// canopy-view as a script runs it: under Xvfb with --screenshot, for every registered method, the
+// image shows the tree where the camera frames it; bad input is one line and exit code 2.
+#include <gtest/gtest.h>
+
+#include "common/image.h"
+#include "methods/method.h"
+#include "test_support.h"
+
+namespace canopy {
+namespace {
+
+const std::string kView = CANOPY_VIEW_EXE;
+
+std::string quickParams(const std::string& method) {
+  if (method == "volumetric_opacity")
+    return R"( --params '{"views": 8, "capture_resolution": 96, "level": 3}')";
+  return "";
+}
+
+class ViewerScreenshot : public testing::TestWithParam<std::string> {};
+
+TEST_P(ViewerScreenshot, ShowsTheTreeInTheFramedRegion) {
+  test::TempDir dir;
+  const auto shot = dir / "shot.png";
+  std::string error;
+  const int code = test::runCommand(
+      "xvfb-run -a " + kView + " --tree sparse --leaves 300 --method " + GetParam() +
+          quickParams(GetParam()) + " --width 320 --height 240 --frames 2 --hide-ui --screenshot " +
+          shot.string() + " --bookmarks " + (dir / "b.json").string(),
+      &error);
+  ASSERT_EQ(code, 0) << error;
+  const ImageRgba8 image = readImage(shot);
+  ASSERT_EQ(image.width, 320);
+  ASSERT_EQ(image.height, 240);
+  // The tree is what differs from the background (sRGB 0.5, 0.6, 0.75); the orbit camera frames
+  // it from 3 radii, so it covers a good share of the image and stays inside the middle.
+  long tree = 0, outside = 0;
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 0; x < image.width; ++x) {
+      const uint8_t* p = image.at(x, y);
+      const bool background =
+          std::abs(p[0] - 128) <= 3 && std::abs(p[1] - 153) <= 3 && std::abs(p[2] - 191) <= 3;
+      if (background) continue;
+      ++tree;
+      const bool middle = x > image.width / 6 && x < image.width * 5 / 6 && y > 0;
+      outside += middle ? 0 : 1;
+    }
+  }
+  EXPECT_GT(tree, image.width * image.height / 50) << "the tree is visible";
+  EXPECT_LT(outside, tree / 20 + 1) << "and where the camera frames it";
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryRegisteredMethod, ViewerScreenshot,
+                         testing::ValuesIn(builtinMethods().names()),
+                         [](const testing::TestParamInfo<std::string>& info) {
+                           return info.param;
+                         });
+
+int errorLines(const std::string& text) {
+  return int(std::count(text.begin(), text.end(), '\n'));
+}
+
+TEST(Viewer, BadInputIsOneLineAndExitCode2) {
+  test::TempDir dir;
+  std::string error;
+  // No display.
+  EXPECT_EQ(test::runCommand("env -u DISPLAY -u WAYLAND_DISPLAY " + kView +
+                                 " --tree sparse --screenshot " + (dir / "x.png").string(),
+                             &error),
+            2);
+  EXPECT_NE(error.find("display"), std::string::npos) << error;
+  EXPECT_EQ(errorLines(error), 1) << error;
+  // Unknown method, missing tree file, bad parameters: before any window opens.
+  EXPECT_EQ(test::runCommand(kView + " --method no_such_method", &error), 2);
+  EXPECT_NE(error.find("no_such_method"), std::string::npos) << error;
+  EXPECT_EQ(errorLines(error), 1) << error;
+  EXPECT_EQ(test::runCommand(kView + " --tree /nowhere/tree.obj", &error), 2);
+  EXPECT_NE(error.find("/nowhere/tree.obj"), std::string::npos) << error;
+  EXPECT_EQ(
+      test::runCommand(kView + " --method bbox_hierarchy --params '{\"texture_size\": 0}'", &error),
+      2);
+  EXPECT_NE(error.find("texture_size"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace canopy
