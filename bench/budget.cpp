@@ -19,6 +19,14 @@ double between(const MemoryKnob& knob, double a, double b) {
   return a > 0.0 && b > 0.0 ? std::sqrt(a * b) : 0.5 * (a + b);
 }
 
+// The next value towards `end`: twice (or half) the current one, at most `end`.
+double expand(const MemoryKnob& knob, double value, double end) {
+  double next = end > value ? std::max(value * 2.0, value + (knob.integer ? 1.0 : 0.0))
+                            : value * 0.5;
+  if (knob.integer) next = std::round(next);
+  return end > value ? std::min(next, end) : std::max(next, end);
+}
+
 bool adjacent(const MemoryKnob& knob, double a, double b) {
   return knob.integer ? std::abs(a - b) <= 1.0 : std::abs(a - b) <= 1e-3 * std::abs(a + b);
 }
@@ -54,11 +62,22 @@ KnobSearch bisectToTarget(const MemoryKnob& knob, double target, double toleranc
     search.reached = within(low);
     return search;
   }
-  const double high = evaluate(b.high);
-  keepBest(b.high, high);
-  if (within(high) || high < target) {
-    search.reached = within(high);
-    return search;
+  // Bracket the target from below, doubling the value (halving for shrinking knobs), so a huge
+  // end of the range — gigabytes of texture — is never baked unless the budget asks for it.
+  const double end = b.high;
+  for (double next = expand(knob, b.low, end);; next = expand(knob, b.low, end)) {
+    const double m = evaluate(next);
+    keepBest(next, m);
+    if (within(m)) {
+      search.reached = true;
+      return search;
+    }
+    if (m > target) {
+      b.high = next;
+      break;
+    }
+    b.low = next;
+    if (next == end || search.steps >= maxSteps) return search;  // the whole range is too small
   }
   while (search.steps < maxSteps && !adjacent(knob, b.low, b.high)) {
     const double mid = between(knob, b.low, b.high);
@@ -77,16 +96,26 @@ KnobSearch leastMemoryReaching(const MemoryKnob& knob, double target,
   KnobSearch search;
   Evaluator evaluate{quality, search};
   Bracket b = memoryOrdered(knob);
-  const double most = evaluate(b.high);
-  search.value = b.high;
-  search.measured = most;
-  if (most < target) return search;  // not reachable in range
-  search.reached = true;
   const double least = evaluate(b.low);
+  search.value = b.low;
+  search.measured = least;
   if (least >= target) {
-    search.value = b.low;
-    search.measured = least;
+    search.reached = true;
     return search;
+  }
+  // Grow from the cheap end until the target is reached (doubling), then bisect back.
+  const double end = b.high;
+  for (double next = expand(knob, b.low, end);; next = expand(knob, b.low, end)) {
+    const double q = evaluate(next);
+    search.value = next;
+    search.measured = q;
+    if (q >= target) {
+      b.high = next;
+      search.reached = true;
+      break;
+    }
+    b.low = next;
+    if (next == end || search.steps >= maxSteps) return search;  // not reachable in range
   }
   // Invariant: quality(low) < target <= quality(high).
   while (search.steps < maxSteps && !adjacent(knob, b.low, b.high)) {

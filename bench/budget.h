@@ -25,10 +25,11 @@ struct KnobSearch {
   std::vector<std::pair<double, double>> trace;  // (value, measured) in evaluation order
 };
 
-// Bisection (geometric for continuous knobs, so resolutions halve) for the value whose
-// `measure` is within `tolerance` (relative) of `target`, assuming `measure` grows with the
-// value when knob.memoryGrows and shrinks otherwise. When the target lies outside the range the
-// nearer end is returned with reached = false.
+// The value whose `measure` is within `tolerance` (relative) of `target`, assuming `measure`
+// grows with the value when knob.memoryGrows and shrinks otherwise: from the cheap end of the
+// range the value doubles (halves for shrinking knobs) until the target is passed, then a
+// bisection (geometric for continuous knobs) closes in. The expensive end of the range is only
+// baked when the budget needs it. Out of range: the nearest value tried, reached = false.
 KnobSearch bisectToTarget(const MemoryKnob& knob, double target, double tolerance,
                           const std::function<double(double)>& measure, int maxSteps);
 

@@ -23,6 +23,8 @@ TEST(Budget, BisectionHitsASyntheticMemoryCurveWithinFivePercent) {
     EXPECT_NEAR(memory(s.value), target, 0.05 * target) << target;
     EXPECT_EQ(s.value, std::round(s.value)) << "integer knob";
     EXPECT_LE(s.steps, 16);
+    // The search grows from the cheap end: nothing far beyond the answer is ever baked.
+    for (const auto& [value, measured] : s.trace) EXPECT_LE(value, 2.0 * s.value + 1.0) << target;
   }
   // Out of range: the nearer end, not reached.
   const KnobSearch tooSmall = bisectToTarget(knob, 0.01, 0.05, memory, 16);
