@@ -9,7 +9,7 @@ paper_figures/<name>/:
   comparison_grid.png   rows: views; columns: reference then each variant, each image above its
                         per-pixel error heat map (with a scale bar)       [needs images/]
   crops.png             close-ups of the nearest view, as the papers' Figs. 10 and 12 [images/]
-  popping.png           per-frame and temporal error along the dolly path   [popping.csv]
+  popping_<tree>.png    per-frame and temporal error along the dolly and orbit [popping.csv]
   captions.md           what each figure shows, with the config, commit and renderer
 
 Reads only what canopy-bench wrote (CSV, JSON, PNG). Figures whose inputs are missing (images are
@@ -220,38 +220,48 @@ def crops(run_dir, tree, variants, path, size=128):
     return True
 
 
-def plot_popping(run_dir, path):
+def plot_popping(run_dir, out):
+    """Per tree: PSNR and temporal excess along the dolly (x: distance) and the orbit (x: azimuth),
+    with ticks where a method switched level of detail. Returns the files written."""
     popping = run_dir / "popping.csv"
     if not popping.exists():
-        return False
+        return []
     rows = list(csv.DictReader(popping.open()))
-    groups = {}
-    for row in rows:
-        groups.setdefault((row["tree"], row["variant"], row["path"]), []).append(row)
-    paths = sorted({key[2] for key in groups})
-    fig, axes = plt.subplots(2, len(paths), figsize=(5.5 * len(paths), 6), squeeze=False)
-    for column, path_name in enumerate(paths):
-        for (tree, variant, p), frames in sorted(groups.items()):
-            if p != path_name or variant == "polygonal":
-                continue
-            x = [number(f["distance"]) for f in frames]
-            label = f"{tree} · {variant}"
-            axes[0][column].plot(x, [number(f["psnr"]) for f in frames], label=label, linewidth=1)
-            line, = axes[1][column].plot(x, [number(f["temporal_excess"]) for f in frames], label=label,
-                                         linewidth=1)
-            switches = [xi for xi, f in zip(x, frames) if f.get("lod_switch") == "1"]
-            axes[1][column].scatter(switches, [0] * len(switches), marker="|", color=line.get_color(), s=60)
-        axes[0][column].set_title(f"{path_name} path")
-        axes[0][column].set_ylabel("PSNR vs reference (dB)")
-        axes[1][column].set_ylabel("temporal error − reference's")
-        for axis in axes[:, column]:
-            axis.set_xlabel("camera distance (bounding radii)")
-            axis.grid(True, alpha=0.3)
-            axis.legend(fontsize=6)
-    fig.tight_layout()
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return True
+    written = []
+    for tree in sorted({r["tree"] for r in rows}):
+        groups = {}
+        for row in (r for r in rows if r["tree"] == tree and r["variant"] != "polygonal"):
+            groups.setdefault((row["variant"], row["path"]), []).append(row)
+        paths = sorted({key[1] for key in groups})
+        fig, axes = plt.subplots(2, len(paths), figsize=(5.5 * len(paths), 6), squeeze=False)
+        for column, path_name in enumerate(paths):
+            for (variant, p), frames in sorted(groups.items()):
+                if p != path_name:
+                    continue
+                if path_name == "orbit":
+                    x = [360.0 * int(f["frame"]) / len(frames) for f in frames]
+                else:
+                    x = [number(f["distance"]) for f in frames]
+                axes[0][column].plot(x, [number(f["psnr"]) for f in frames], label=variant, linewidth=1)
+                line, = axes[1][column].plot(x, [number(f["temporal_excess"]) for f in frames],
+                                             label=variant, linewidth=1)
+                switches = [xi for xi, f in zip(x, frames) if f.get("lod_switch") == "1"]
+                axes[1][column].scatter(switches, [0] * len(switches), marker="|", color=line.get_color(),
+                                        s=80)
+            axes[0][column].set_title(f"{tree}: {path_name} path")
+            axes[0][column].set_ylabel("frame PSNR vs reference (dB)")
+            axes[1][column].set_ylabel("temporal error − reference's (8-bit RMS)")
+            xlabel = "azimuth (degrees)" if path_name == "orbit" else "camera distance (bounding radii)"
+            for axis in axes[:, column]:
+                axis.set_xlabel(xlabel)
+                axis.grid(True, alpha=0.3)
+                axis.legend(fontsize=6)
+        fig.tight_layout()
+        name = f"popping_{safe_name(tree)}.png"
+        fig.savefig(out / name, dpi=150)
+        plt.close(fig)
+        written.append(name)
+    return written
 
 
 def sweep_groups(variants):
@@ -306,10 +316,10 @@ def make_figures(run_dir: Path, out_root: Path):
             name = f"crops_{safe_name(tree)}_{safe_name(keys)}.png"
             if crops(run_dir, tree, group, out / name):
                 made.append(f"- `{name}`: the same close-up across the `{keys}` sweep.")
-    if plot_popping(run_dir, out / "popping.png"):
-        made.append("- `popping.png`: along the dolly (close to far) and orbit paths, per-frame PSNR against "
-                    "the reference and the temporal error in excess of the reference's; ticks mark frames "
-                    "where the method switched level of detail.")
+    for name in plot_popping(run_dir, out):
+        made.append(f"- `{name}`: along the dolly (close to far, log-spaced) and the orbit, per-frame PSNR "
+                    "against the reference and the temporal error in excess of the reference's; ticks "
+                    "mark frames where the method switched level of detail.")
     if not (run_dir / "images").is_dir():
         made.append("- (image figures skipped: the run's images/ folder is not present)")
 
