@@ -21,8 +21,8 @@ double between(const MemoryKnob& knob, double a, double b) {
 
 // The next value towards `end`: twice (or half) the current one, at most `end`.
 double expand(const MemoryKnob& knob, double value, double end) {
-  double next = end > value ? std::max(value * 2.0, value + (knob.integer ? 1.0 : 0.0))
-                            : value * 0.5;
+  double next =
+      end > value ? std::max(value * 2.0, value + (knob.integer ? 1.0 : 0.0)) : value * 0.5;
   if (knob.integer) next = std::round(next);
   return end > value ? std::min(next, end) : std::max(next, end);
 }

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <map>
 #include <set>
 #include <thread>
 
@@ -366,6 +367,84 @@ TEST(Report, LatexTableHasOneCellPerColumnAndEscapesNames) {
     return std::count(line.begin(), line.end(), '&');
   };
   EXPECT_EQ(cells(header), cells(row));
+}
+
+// A CSV line split by RFC 4180 rules (quoted fields may hold commas and doubled quotes).
+std::vector<std::string> csvFields(const std::string& line) {
+  std::vector<std::string> fields(1);
+  bool quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted && c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+      fields.back() += '"';
+      ++i;
+    } else if (c == '"') {
+      quoted = !quoted;
+    } else if (c == ',' && !quoted) {
+      fields.emplace_back();
+    } else {
+      fields.back() += c;
+    }
+  }
+  return fields;
+}
+
+TEST(Report, CsvParsesBackAndMarkdownRowsMatchTheirHeader) {
+  std::vector<nlohmann::json> records;
+  for (const char* variant : {"m[a=1,b=\"x\"]", "polygonal"}) {
+    records.push_back(
+        {{"kind", "bake"},
+         {"tree", "oak"},
+         {"method", "m"},
+         {"variant", variant},
+         {"params", {{"a", 1}, {"b", "x"}}},
+         {"bake_s", 2.25},
+         {"memory_bytes", {{"texture", 3e6}, {"geometry", 1e6}, {"other", 0}, {"total", 4e6}}},
+         {"disk_bytes", 2e6}});
+    records.push_back({{"kind", "view"},
+                       {"tree", "oak"},
+                       {"method", "m"},
+                       {"variant", variant},
+                       {"distance", 1.5},
+                       {"elevation", 30},
+                       {"psnr", 21.5},
+                       {"psnr_frame", 30.0},
+                       {"ssim", 0.75},
+                       {"coverage_error", 0.125}});
+  }
+  const auto rows = summarize(records);
+  const std::string csv = formatSummaryCsv(rows);
+  std::vector<std::string> lines;
+  for (size_t start = 0, end; (end = csv.find('\n', start)) != std::string::npos; start = end + 1)
+    lines.push_back(csv.substr(start, end - start));
+  ASSERT_EQ(lines.size(), 3u);
+  const auto header = csvFields(lines[0]);
+  for (size_t l = 1; l < lines.size(); ++l) {
+    const auto fields = csvFields(lines[l]);
+    ASSERT_EQ(fields.size(), header.size()) << lines[l];
+    std::map<std::string, std::string> row;
+    for (size_t f = 0; f < fields.size(); ++f) row[header[f]] = fields[f];
+    EXPECT_EQ(row["tree"], "oak");
+    EXPECT_EQ(nlohmann::json::parse(row["params"]), nlohmann::json({{"a", 1}, {"b", "x"}}));
+    EXPECT_DOUBLE_EQ(std::stod(row["memory_total_mb"]), 4.0);
+    EXPECT_DOUBLE_EQ(std::stod(row["psnr_d1.5"]), 21.5);
+    EXPECT_DOUBLE_EQ(std::stod(row["psnr_e30"]), 21.5);
+    EXPECT_DOUBLE_EQ(std::stod(row["bake_s"]), 2.25);
+  }
+  EXPECT_EQ(csvFields(lines[1])[2], "m[a=1,b=\"x\"]") << "quoted and unquoted back";
+  // Markdown: in every table, each row has as many cells as its header.
+  const std::string md = formatSummaryMarkdown(rows, "t", "r");
+  size_t expected = 0;
+  for (size_t start = 0, end; (end = md.find('\n', start)) != std::string::npos; start = end + 1) {
+    const std::string line = md.substr(start, end - start);
+    if (line.empty() || line[0] != '|') {
+      expected = 0;
+      continue;
+    }
+    const size_t cells = std::count(line.begin(), line.end(), '|');
+    if (expected == 0) expected = cells;
+    EXPECT_EQ(cells, expected) << line;
+  }
 }
 
 }  // namespace
