@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
     const int code = app.exit(error);
     return code == 0 ? kExitOk : kExitBadInput;
   }
-  try {
+  return runWithExitCodes("canopy-bench", [&]() -> int {
     if (listMethods) {
       for (const std::string& name : builtinMethods().names()) std::printf("%s\n", name.c_str());
       return kExitOk;
@@ -141,11 +141,5 @@ int main(int argc, char** argv) {
     options.saveImages = !noImages;
     runExperiment(config, options);
     return kExitOk;
-  } catch (const InputError& error) {
-    std::fprintf(stderr, "canopy-bench: %s\n", error.what());
-    return kExitBadInput;
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "canopy-bench: internal error: %s\n", error.what());
-    return kExitInternalError;
-  }
+  });
 }

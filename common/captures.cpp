@@ -73,8 +73,12 @@ uint32_t AlphaIntegral::foregroundCount(int x0, int y0, int x1, int y1) const {
   return rectSum(mForeground, mWidth, mHeight, x0, y0, x1, y1);
 }
 
-bool projectBoxInside(const PixelCamera& camera, const Aabb& box, PixelRect& rect) {
-  glm::vec2 lo(std::numeric_limits<float>::max()), hi(std::numeric_limits<float>::lowest());
+namespace {
+// The bounding rectangle (pixel coordinates) of a box's projection; false when a corner is behind
+// the camera.
+bool projectedBounds(const PixelCamera& camera, const Aabb& box, glm::vec2& lo, glm::vec2& hi) {
+  lo = glm::vec2(std::numeric_limits<float>::max());
+  hi = glm::vec2(std::numeric_limits<float>::lowest());
   for (int c = 0; c < 8; ++c) {
     const glm::vec3 corner(c & 1 ? box.max.x : box.min.x, c & 2 ? box.max.y : box.min.y,
                            c & 4 ? box.max.z : box.min.z);
@@ -83,6 +87,13 @@ bool projectBoxInside(const PixelCamera& camera, const Aabb& box, PixelRect& rec
     lo = glm::min(lo, p);
     hi = glm::max(hi, p);
   }
+  return true;
+}
+}  // namespace
+
+bool projectBoxInside(const PixelCamera& camera, const Aabb& box, PixelRect& rect) {
+  glm::vec2 lo, hi;
+  if (!projectedBounds(camera, box, lo, hi)) return false;
   if (lo.x < 0.0f || lo.y < 0.0f || hi.x > float(camera.width()) || hi.y > float(camera.height()))
     return false;
   rect = {int(std::floor(lo.x)), int(std::floor(lo.y)), int(std::ceil(hi.x)), int(std::ceil(hi.y))};
@@ -92,15 +103,8 @@ bool projectBoxInside(const PixelCamera& camera, const Aabb& box, PixelRect& rec
 }
 
 bool viewCarvesBox(const PixelCamera& camera, const AlphaIntegral& mask, const Aabb& box) {
-  glm::vec2 lo(std::numeric_limits<float>::max()), hi(std::numeric_limits<float>::lowest());
-  for (int c = 0; c < 8; ++c) {
-    const glm::vec3 corner(c & 1 ? box.max.x : box.min.x, c & 2 ? box.max.y : box.min.y,
-                           c & 4 ? box.max.z : box.min.z);
-    if (camera.depth(corner) <= 1e-6f) return false;
-    const glm::vec2 p = camera.project(corner);
-    lo = glm::min(lo, p);
-    hi = glm::max(hi, p);
-  }
+  glm::vec2 lo, hi;
+  if (!projectedBounds(camera, box, lo, hi)) return false;
   if (hi.x <= 0.0f || hi.y <= 0.0f || lo.x >= float(camera.width()) ||
       lo.y >= float(camera.height()))
     return true;

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <cstdio>
+
 #include <stdexcept>
 #include <string>
 
@@ -23,5 +25,21 @@ template <typename... Args>
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitInternalError = 1;
 inline constexpr int kExitBadInput = 2;
+
+// Runs a program's body (returning its exit code) under the contract: an InputError becomes one
+// line "<program>: <message>" on stderr and exit code 2, any other exception "internal error"
+// and 1.
+template <typename Body>
+int runWithExitCodes(const char* program, Body&& body) {
+  try {
+    return body();
+  } catch (const InputError& error) {
+    std::fprintf(stderr, "%s: %s\n", program, error.what());
+    return kExitBadInput;
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "%s: internal error: %s\n", program, error.what());
+    return kExitInternalError;
+  }
+}
 
 }  // namespace canopy

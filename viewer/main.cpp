@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
     const int code = app.exit(error);
     return code == 0 ? kExitOk : kExitBadInput;
   }
-  try {
+  return runWithExitCodes("canopy-view", [&]() -> int {
     if (!params.empty()) {
       try {
         options.params = nlohmann::json::parse(params);
@@ -50,11 +50,5 @@ int main(int argc, char** argv) {
     if (options.frames < 1) throwInputError("--frames: must be >= 1");
     runViewer(options);
     return kExitOk;
-  } catch (const InputError& error) {
-    std::fprintf(stderr, "canopy-view: %s\n", error.what());
-    return kExitBadInput;
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "canopy-view: internal error: %s\n", error.what());
-    return kExitInternalError;
-  }
+  });
 }

@@ -58,6 +58,12 @@ CapturedView syntheticView(const OpacityGrid& truth, const Camera& camera, int s
   return view;
 }
 
+// Two views of a grid: one along x (rays cross both cells on the x axis), one along z.
+std::vector<CapturedView> alongAndAcross(const OpacityGrid& truth) {
+  return {syntheticView(truth, lookingAt({12, 0, 0}, 20.0f), 64),
+          syntheticView(truth, lookingAt({0, 0, 12}, 20.0f), 64)};
+}
+
 TEST(VolumetricEstimation, OneCellSeenBySeveralRaysConvergesToTheExactTransparency) {
   const OpacityGrid truth = gridWith(1, {{1, 1, 1}}, {0.4f});
   std::vector<CapturedView> captured;
@@ -78,8 +84,7 @@ TEST(VolumetricEstimation, TwoCellsAlongRaysOfTwoViewsAreBothRecovered) {
   // each alone; together they determine both.
   const std::vector<glm::ivec3> cells = {{0, 1, 1}, {2, 1, 1}};
   const OpacityGrid truth = gridWith(1, cells, {0.3f, 0.7f});
-  std::vector<CapturedView> captured = {syntheticView(truth, lookingAt({12, 0, 0}, 20.0f), 64),
-                                        syntheticView(truth, lookingAt({0, 0, 12}, 20.0f), 64)};
+  const std::vector<CapturedView> captured = alongAndAcross(truth);
   const auto views = prepareViews(captured, 0.02f);
   OpacityGrid grid = gridWith(1, cells, {0.6f, 0.6f});
   const SolverResult result = solveByProjection(grid, views, {500, 1e-6f, 1.0f, 1});
@@ -92,8 +97,7 @@ TEST(VolumetricEstimation, TwoCellsAlongRaysOfTwoViewsAreBothRecovered) {
 TEST(VolumetricEstimation, CeresFitsTheSameTwoCells) {
   const std::vector<glm::ivec3> cells = {{0, 1, 1}, {2, 1, 1}};
   const OpacityGrid truth = gridWith(1, cells, {0.3f, 0.7f});
-  std::vector<CapturedView> captured = {syntheticView(truth, lookingAt({12, 0, 0}, 20.0f), 64),
-                                        syntheticView(truth, lookingAt({0, 0, 12}, 20.0f), 64)};
+  const std::vector<CapturedView> captured = alongAndAcross(truth);
   const auto views = prepareViews(captured, 0.02f);
   OpacityGrid grid = gridWith(1, cells, {0.6f, 0.6f});
   const SolverResult result = solveWithCeres(grid, views, {50, 1e-6f, 1.0f, 1});
@@ -105,8 +109,7 @@ TEST(VolumetricEstimation, CeresFitsTheSameTwoCells) {
 TEST(VolumetricEstimation, CutoffEmptiesCellsAboveTheThreshold) {
   const std::vector<glm::ivec3> cells = {{0, 1, 1}, {2, 1, 1}};
   const OpacityGrid truth = gridWith(1, cells, {0.3f, 0.97f});
-  std::vector<CapturedView> captured = {syntheticView(truth, lookingAt({12, 0, 0}, 20.0f), 64),
-                                        syntheticView(truth, lookingAt({0, 0, 12}, 20.0f), 64)};
+  const std::vector<CapturedView> captured = alongAndAcross(truth);
   const auto views = prepareViews(captured, 0.02f);
   OpacityGrid grid = gridWith(1, cells, {0.6f, 0.6f});
   solveByProjection(grid, views, {100, 1e-5f, 0.94f, 1});
