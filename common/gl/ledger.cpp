@@ -79,6 +79,7 @@ uint64_t textureLevelBytes(uint32_t internalFormat, int width, int height, int l
     case GL_R8I:
       return texels;
     case GL_RG8:
+    case GL_RGBA4:
     case GL_R16F:
     case GL_R16UI:
     case GL_R16I:

@@ -28,7 +28,11 @@ struct MultilayerParams {
   bool ambientOcclusion = true;  // §5.2: Embree AO of the polygonal tree at sprite corners (lit)
   int aoRays = 32;               // rays per leaf corner for the ambient occlusion
   std::string compression = "none";  // colour textures: "none", "dxt1" (BC1) or "dxt5" (BC3)
-  bool drawWood = true;              // draw the trunk and branches as geometry
+  // Lists Texture entries: "float16" (RGBA16F, positions on the billboard plane) or "8bit"
+  // (RGBA8: position relative to its hash cell and size, both quantized; AO in 4 bits a corner),
+  // half the memory of the lists and of the AO, for the paper's Table 1 budgets.
+  std::string listsPrecision = "float16";
+  bool drawWood = true;  // draw the trunk and branches as geometry
 
   template <class Visitor>
   void visit(Visitor& v) {
@@ -44,6 +48,7 @@ struct MultilayerParams {
     v("ambient_occlusion", ambientOcclusion);
     v("ao_rays", aoRays, 1, 4096);
     v("compression", compression, {"none", "dxt1", "dxt5"});
+    v("lists_precision", listsPrecision, {"float16", "8bit"});
     v("wood", drawWood);
   }
 };
@@ -140,6 +145,7 @@ class MultilayerIndirect final : public Method {
     mLists.resize(size_t(kListsWidth) * std::max(mListsHeight, 1) * 4, 0.0f);
     mAmbient.resize(mLists.size(), 255);
     mListsHeight = std::max(mListsHeight, 1);
+    if (mParams.listsPrecision == "8bit") quantizeLists(layered, layeredBillboards);
 
     // The low-resolution texture, baked from the layered representation (§5.1).
     std::vector<ImageRgba8> lowRes(billboards.size());
@@ -182,14 +188,25 @@ class MultilayerIndirect final : public Method {
                                          false, MemoryCategory::kTexture, "hash atlas"});
     device.uploadTexture(mHashTexture, GL_RED_INTEGER, GL_UNSIGNED_INT, mHash.data());
     gl::setTextureSampling(mHashTexture, false, false);
-    mListsTexture = device.createTexture({GL_TEXTURE_2D, kListsWidth, mListsHeight, 1, GL_RGBA16F,
-                                          false, MemoryCategory::kTexture, "lists atlas"});
-    device.uploadTexture(mListsTexture, GL_RGBA, GL_FLOAT, mLists.data());
+    if (packed()) {
+      mListsTexture = device.createTexture({GL_TEXTURE_2D, kListsWidth, mListsHeight, 1, GL_RGBA8,
+                                            false, MemoryCategory::kTexture, "lists (8-bit)"});
+      device.uploadTexture(mListsTexture, GL_RGBA, GL_UNSIGNED_BYTE, mListsPacked.data());
+      mAmbientTexture =
+          device.createTexture({GL_TEXTURE_2D, kListsWidth, mListsHeight, 1, GL_RGBA4, false,
+                                MemoryCategory::kTexture, "ambient occlusion (4-bit)"});
+      device.uploadTexture(mAmbientTexture, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4,
+                           mAmbientPacked.data());
+    } else {
+      mListsTexture = device.createTexture({GL_TEXTURE_2D, kListsWidth, mListsHeight, 1, GL_RGBA16F,
+                                            false, MemoryCategory::kTexture, "lists atlas"});
+      device.uploadTexture(mListsTexture, GL_RGBA, GL_FLOAT, mLists.data());
+      mAmbientTexture = device.createTexture({GL_TEXTURE_2D, kListsWidth, mListsHeight, 1, GL_RGBA8,
+                                              false, MemoryCategory::kTexture,
+                                              "ambient occlusion (indexed like the lists)"});
+      device.uploadTexture(mAmbientTexture, GL_RGBA, GL_UNSIGNED_BYTE, mAmbient.data());
+    }
     gl::setTextureSampling(mListsTexture, false, false);
-    mAmbientTexture = device.createTexture({GL_TEXTURE_2D, kListsWidth, mListsHeight, 1, GL_RGBA8,
-                                            false, MemoryCategory::kTexture,
-                                            "ambient occlusion (indexed like the lists)"});
-    device.uploadTexture(mAmbientTexture, GL_RGBA, GL_UNSIGNED_BYTE, mAmbient.data());
     gl::setTextureSampling(mAmbientTexture, false, false);
     mLeavesTexture = uploadLeafImageArray(device, mLeafImages, "oriented leaf images",
                                           parseCompression(mParams.compression));
@@ -240,11 +257,19 @@ class MultilayerIndirect final : public Method {
     header["hash_size"] = {mHashSize.x, mHashSize.y};
     header["lists_height"] = mListsHeight;
     header["leaf_images"] = mLeafImages.size();
+    header["position_range"] = mPositionRange;
+    header["max_sprite_size"] = mMaxSpriteSize;
+    // What the GPU holds is what is stored: the 8-bit lists replace the float ones on disk too.
+    if (packed()) {
+      asset.writeBlob("lists_8bit.bin", mListsPacked);
+      asset.writeBlob("ambient_4bit.bin", mAmbientPacked);
+    } else {
+      asset.writeBlob("lists.bin", mLists);
+      asset.writeBlob("ambient.bin", mAmbient);
+    }
     asset.writeBlob("vertices.bin", mVertices);
     asset.writeBlob("indices.bin", mIndices);
     asset.writeBlob("hash.bin", mHash);
-    asset.writeBlob("lists.bin", mLists);
-    asset.writeBlob("ambient.bin", mAmbient);
     for (size_t i = 0; i < mLeafImages.size(); ++i)
       asset.writeImage(fmt::format("leaf_image_{}.png", i), mLeafImages[i]);
     asset.writeImage("lowres.png", mLowRes);
@@ -262,8 +287,21 @@ class MultilayerIndirect final : public Method {
     mVertices = asset.readBlobAs<Vertex>("vertices.bin");
     mIndices = asset.readBlobAs<uint32_t>("indices.bin");
     mHash = asset.readBlobAs<uint32_t>("hash.bin");
-    mLists = asset.readBlobAs<float>("lists.bin");
-    mAmbient = asset.readBlobAs<uint8_t>("ambient.bin");
+    mPositionRange = header.at("position_range");
+    mMaxSpriteSize = header.at("max_sprite_size");
+    if (packed()) {
+      mListsPacked = asset.readBlobAs<uint8_t>("lists_8bit.bin");
+      mAmbientPacked = asset.readBlobAs<uint16_t>("ambient_4bit.bin");
+      if (mAmbientPacked.size() * 4 != mListsPacked.size())
+        throwInputError("{}: 8-bit lists and AO blobs differ in length", folder);
+      // The float lists stand in for sizes and image checks only: images from the packed ones.
+      mLists.assign(mListsPacked.size(), 0.0f);
+      for (size_t i = 3; i < mLists.size(); i += 4) mLists[i] = float(mListsPacked[i]);
+      mAmbient.clear();
+    } else {
+      mLists = asset.readBlobAs<float>("lists.bin");
+      mAmbient = asset.readBlobAs<uint8_t>("ambient.bin");
+    }
     mLeafImages.clear();
     for (size_t i = 0; i < header.at("leaf_images").get<size_t>(); ++i)
       mLeafImages.push_back(asset.readImage(fmt::format("leaf_image_{}.png", i)));
@@ -286,6 +324,56 @@ class MultilayerIndirect final : public Method {
   }
 
  private:
+  bool packed() const { return mParams.listsPrecision == "8bit"; }
+
+  // lists_precision "8bit": each entry's position relative to its own hash cell (in cells) and
+  // its size as a fraction of the largest, in 8 bits; the image index in 8 bits; AO in 4 bits.
+  void quantizeLists(const std::vector<LayeredBillboard>& layered, size_t layeredBillboards) {
+    const size_t entries = mLists.size() / 4;
+    std::vector<glm::vec2> relative(entries, glm::vec2(0.5f));
+    mPositionRange = 0.0f;
+    mMaxSpriteSize = 1e-12f;
+    size_t base = 0;
+    for (size_t i = 0; i < layeredBillboards; ++i) {
+      const LayeredBillboard& l = layered[i];
+      const glm::vec2 half = l.cellSize * glm::vec2(l.cells) * 0.5f;
+      for (int y = 0; y < l.cells.y; ++y) {
+        for (int x = 0; x < l.cells.x; ++x) {
+          const size_t cell = size_t(y) * l.cells.x + x;
+          for (uint32_t k = 0; k < l.listLength[cell]; ++k) {
+            const size_t e = base + l.listStart[cell] + k;
+            const glm::vec2 origin = -half + glm::vec2(x, y) * l.cellSize;
+            relative[e] = (glm::vec2(mLists[e * 4], mLists[e * 4 + 1]) - origin) / l.cellSize;
+            mPositionRange = std::max({mPositionRange, -relative[e].x, -relative[e].y,
+                                       relative[e].x - 1.0f, relative[e].y - 1.0f});
+          }
+        }
+      }
+      base += l.entries.size();
+    }
+    for (size_t e = 0; e < entries; ++e)
+      mMaxSpriteSize = std::max(mMaxSpriteSize, mLists[e * 4 + 2]);
+    const auto unorm = [](float v) {
+      return uint8_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
+    };
+    mListsPacked.assign(mLists.size(), 0);
+    mAmbientPacked.assign(mLists.size() / 4, 0xffff);
+    for (size_t e = 0; e < entries; ++e) {
+      if (mLists[e * 4 + 3] > 255.0f)
+        throwInputError(
+            "multilayer_indirect: lists_precision \"8bit\" holds at most 256 leaf images");
+      const glm::vec2 q = (relative[e] + mPositionRange) / (1.0f + 2.0f * mPositionRange);
+      mListsPacked[e * 4] = unorm(q.x);
+      mListsPacked[e * 4 + 1] = unorm(q.y);
+      mListsPacked[e * 4 + 2] = std::max<uint8_t>(1, unorm(mLists[e * 4 + 2] / mMaxSpriteSize));
+      mListsPacked[e * 4 + 3] = uint8_t(std::lround(mLists[e * 4 + 3]));
+      uint16_t word = 0;
+      for (int c = 0; c < 4; ++c)
+        word = uint16_t(word << 4 | uint16_t(std::lround(mAmbient[e * 4 + c] / 255.0f * 15.0f)));
+      mAmbientPacked[e] = word;
+    }
+  }
+
   // What the full walk shows from the billboard's front, at lowres_texels_per_cell texels per
   // hash cell, 4×4 samples per texel: colour (linear mean) and coverage.
   ImageRgba8 captureLayers(const Billboard& billboard, const LayeredBillboard& layered) const {
@@ -349,6 +437,9 @@ class MultilayerIndirect final : public Method {
     program.set("uListsWidth", kListsWidth);
     program.set("uImagesPerSide", mParams.bins.tilts * mParams.bins.rotations);
     program.set("uLodFactor", mParams.lodFactor);
+    program.set("uListsPacked", packed() ? 1 : 0);
+    program.set("uPositionRange", mPositionRange);
+    program.set("uMaxSpriteSize", mMaxSpriteSize);
     const std::pair<GLenum, GLuint> units[] = {{GL_TEXTURE_2D, mHashTexture.id()},
                                                {GL_TEXTURE_2D, mListsTexture.id()},
                                                {GL_TEXTURE_2D_ARRAY, mLeavesTexture.id()},
@@ -370,6 +461,11 @@ class MultilayerIndirect final : public Method {
   int mListsHeight = 1;
   std::vector<float> mLists;
   std::vector<uint8_t> mAmbient;  // RGBA8 per list entry: ambient term at the sprite's corners
+  // lists_precision "8bit": the same entries quantized (RGBA8) and the AO in 4 bits a corner.
+  std::vector<uint8_t> mListsPacked;
+  std::vector<uint16_t> mAmbientPacked;
+  float mPositionRange = 0.0f;  // packed positions span [-range, 1 + range] cells
+  float mMaxSpriteSize = 0.0f;  // packed sizes are fractions of this (plane units)
   std::vector<ImageRgba8> mLeafImages;
   ImageRgba8 mLowRes;
   gl::Buffer mVbo, mIbo;

@@ -20,6 +20,9 @@ uniform float uLodFactor;        // entries = factor × projected hash-texel dia
 uniform int uLit;
 uniform vec3 uLightDirection;
 uniform float uAmbient;
+uniform int uListsPacked;        // 1: RGBA8 lists (position in its cell, size fraction, image)
+uniform float uPositionRange;    // packed positions span [-range, 1 + range] cells
+uniform float uMaxSpriteSize;    // packed sizes are fractions of it (plane units)
 
 out vec4 outColor;
 
@@ -48,6 +51,12 @@ void main() {
   for (int i = 0; i < budget; ++i) {
     int k = start + (fromFront ? i : listLength - 1 - i);
     vec4 entry = texelFetch(uLists, ivec2(k % uListsWidth, k / uListsWidth), 0);
+    if (uListsPacked != 0) {  // back to plane units
+      vec2 cellSize = 2.0 * vHalfExtents / vec2(vHash.zw);
+      vec2 inCell = entry.xy * (1.0 + 2.0 * uPositionRange) - uPositionRange;
+      entry = vec4(-vHalfExtents + (vec2(cell) + inCell) * cellSize, entry.z * uMaxSpriteSize,
+                   floor(entry.w * 255.0 + 0.5));
+    }
     vec2 local = (plane - entry.xy) / entry.z + 0.5;
     if (any(lessThan(local, vec2(0.0))) || any(greaterThanEqual(local, vec2(1.0)))) continue;
     float image = entry.w;

@@ -3,12 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <set>
 
 #include <glm/geometric.hpp>
 
 #include "bench/harness.h"
 #include "common/error.h"
+#include "common/metrics.h"
 #include "methods/common/leaf_capture.h"
 #include "methods/method.h"
 #include "test_support.h"
@@ -189,6 +191,57 @@ TEST(MultilayerIndirect, ShaderLodWithAllEntriesEqualsFullEvaluation) {
   nlohmann::json stingy = base;
   stingy["lod_factor"] = 0.01;
   EXPECT_NE(renderBoth(tree, stingy, {0, 0, 1}, {0, 1, 0}, 20.0f).method, full.method);
+}
+
+TEST(MultilayerIndirect, EightBitListsDrawLikeFloatListsInHalfTheMemoryAndSurviveSaveLoad) {
+  const Tree tree = test::smallTree(800, 4);
+  auto context = test::makeTestContext();
+  gl::Ledger ledger;
+  gl::Device device(ledger);
+  RenderSettings settings;
+  settings.width = settings.height = 160;
+  Harness harness(device, settings);
+  const Camera camera = orbitCamera(tree.bounds, {2.0f, 20.0f, 40.0f}, 40.0f);
+  std::map<std::string, std::unique_ptr<Method>> methods;
+  for (const std::string precision : {"float16", "8bit"}) {
+    auto m =
+        builtinMethods()
+            .find("multilayer_indirect")
+            .create({{"clusters", 20}, {"lod", false}, {"lists_precision", precision}}, "test");
+    BakeContext ctx;
+    m->bake(tree, ctx);
+    gl::Device::OwnerScope scope(device, precision);
+    m->upload(device);
+    methods[precision] = std::move(m);
+  }
+  const ImageRgba8 exact = harness.render(*methods["float16"], camera);
+  const ImageRgba8 packed = harness.render(*methods["8bit"], camera);
+  // Quantization moves sprites by at most (1 + 2·range)/510 cell: a few pixels change, the image
+  // stays the same picture.
+  const ImageMetrics metrics = compareImages(exact, packed);
+  EXPECT_GT(metrics.psnr, 30.0);
+  EXPECT_LT(metrics.coverageError, 0.01);
+  EXPECT_NE(exact, packed) << "the lists really are quantized";
+  // Lists RGBA16F → RGBA8 and AO RGBA8 → RGBA4: 6 of 12 bytes per entry saved.
+  const double saved = double(ledger.totals("float16").texture) - ledger.totals("8bit").texture;
+  const auto& report = methods["8bit"]->bakeReport();
+  const double entries = report.at("list_entries").get<double>();
+  EXPECT_NEAR(saved, 6.0 * entries, 1.0);
+  // Save and load: the 8-bit blobs are what is stored, and draw the same image.
+  test::TempDir dir;
+  AssetFolder asset(dir.path());
+  methods["8bit"]->save(asset);
+  EXPECT_FALSE(std::filesystem::exists(dir / "lists.bin"));
+  auto loaded = builtinMethods()
+                    .find("multilayer_indirect")
+                    .create(methods["8bit"]->effectiveParams(), "test");
+  AssetFolder reader(dir.path());
+  loaded->load(reader);
+  {
+    gl::Device::OwnerScope scope(device, "loaded");
+    loaded->upload(device);
+  }
+  EXPECT_EQ(harness.render(*loaded, camera), packed);
 }
 
 TEST(MultilayerIndirect, BadParametersNameTheParameter) {
