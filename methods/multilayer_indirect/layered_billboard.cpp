@@ -59,6 +59,14 @@ LayeredBillboard buildLayeredBillboard(const Tree& tree, const Billboard& billbo
     LayerEntry entry = leafSprite(tree.leaves[index], billboard, params.sprite);
     entry.leaf = index;
     entry.image = orientedImageIndex(tree.leaves[index], billboard, params.bins);
+    {
+      const Leaf& leaf = tree.leaves[index];
+      const glm::vec2 along(glm::dot(leaf.axisV, billboard.axisU),
+                            glm::dot(leaf.axisV, billboard.axisV));
+      const glm::vec2 inPlane(glm::dot(leaf.normal, billboard.axisU),
+                              glm::dot(leaf.normal, billboard.axisV));
+      entry.roll = glm::dot(inPlane, glm::vec2(-along.y, along.x)) >= 0.0f ? 1 : -1;
+    }
     if (cornerOcclusion) {
       const Leaf& leaf = tree.leaves[index];
       std::vector<glm::vec2> points;

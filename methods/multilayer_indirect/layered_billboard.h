@@ -32,6 +32,10 @@ struct LayerEntry {
   uint32_t leaf = 0;        // index into Tree::leaves
   float depth = 0.0f;       // along the billboard normal; lists are sorted by it, largest first
   glm::vec4 ambient{1.0f};  // ambient occlusion at the sprite's corners (−,−) (+,−) (+,+) (−,+)
+  // Which way the leaf's normal leans across its axis (+1/−1): the orientation bins hold the
+  // axis angle and |n·n_billboard| but not this sign, which lit shading needs (§5.2: "a
+  // correction for the billboard plane normal could also be stored in the entries").
+  int roll = 1;
 };
 
 // A billboard's Hash Texture (a grid of cells, each naming a list or empty) and its lists,

@@ -60,6 +60,7 @@ struct Vertex {
   glm::vec2 uv;        // over the billboard
   glm::ivec4 hash;     // first cell in the hash atlas, cells
   glm::vec2 halfExtents;
+  glm::vec3 tangent;  // the billboard's axisU: with the normal, the frame leaf normals live in
 };
 
 constexpr int kListsWidth = 2048;
@@ -123,7 +124,9 @@ class MultilayerIndirect final : public Method {
       const LayeredBillboard& l = layered[i];
       const auto base = static_cast<uint32_t>(mLists.size() / 4);
       for (const LayerEntry& e : l.entries) {
-        mLists.insert(mLists.end(), {e.position.x, e.position.y, e.size, float(e.image)});
+        // The image index, negative (−index − 1) when the leaf's normal leans the other way.
+        const float image = e.roll > 0 ? float(e.image) : -float(e.image) - 1.0f;
+        mLists.insert(mLists.end(), {e.position.x, e.position.y, e.size, image});
         for (int c = 0; c < 4; ++c)
           mAmbient.push_back(static_cast<uint8_t>(std::lround(e.ambient[c] * 255.0f)));
       }
@@ -163,7 +166,7 @@ class MultilayerIndirect final : public Method {
         mVertices.push_back({billboards[i]->corner(c), billboards[i]->normal, atlas.cornerUv(i, c),
                              glm::vec2(kU[c], kV[c]),
                              glm::ivec4(hashLayout.origins[i], layered[i].cells),
-                             billboards[i]->halfExtents});
+                             billboards[i]->halfExtents, billboards[i]->axisU});
       }
       for (uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) mIndices.push_back(base + k);
     }
@@ -296,7 +299,7 @@ class MultilayerIndirect final : public Method {
         throwInputError("{}: 8-bit lists and AO blobs differ in length", folder);
       // The float lists stand in for sizes and image checks only: images from the packed ones.
       mLists.assign(mListsPacked.size(), 0.0f);
-      for (size_t i = 3; i < mLists.size(); i += 4) mLists[i] = float(mListsPacked[i]);
+      for (size_t i = 3; i < mLists.size(); i += 4) mLists[i] = float(mListsPacked[i] & 0x7f);
       mAmbient.clear();
     } else {
       mLists = asset.readBlobAs<float>("lists.bin");
@@ -315,7 +318,8 @@ class MultilayerIndirect final : public Method {
         throwInputError("{}: hash cell points past the lists", folder);
     }
     for (size_t i = 3; i < mLists.size(); i += 4) {
-      if (mLists[i] < 0.0f || mLists[i] >= float(mLeafImages.size()) + 0.5f)
+      const float image = mLists[i] < 0.0f ? -mLists[i] - 1.0f : mLists[i];
+      if (image >= float(mLeafImages.size()) + 0.5f)
         throwInputError("{}: list entry names a missing leaf image", folder);
     }
     validateIndices(mIndices, mVertices.size(), asset.folder().string());
@@ -359,14 +363,18 @@ class MultilayerIndirect final : public Method {
     mListsPacked.assign(mLists.size(), 0);
     mAmbientPacked.assign(mLists.size() / 4, 0xffff);
     for (size_t e = 0; e < entries; ++e) {
-      if (mLists[e * 4 + 3] > 255.0f)
+      const float stored = mLists[e * 4 + 3];
+      const bool leansBack = stored < 0.0f;
+      const float image = leansBack ? -stored - 1.0f : stored;
+      if (image > 127.0f)
         throwInputError(
-            "multilayer_indirect: lists_precision \"8bit\" holds at most 256 leaf images");
+            "multilayer_indirect: lists_precision \"8bit\" holds at most 128 leaf images (lower "
+            "'rotations' or 'tilts')");
       const glm::vec2 q = (relative[e] + mPositionRange) / (1.0f + 2.0f * mPositionRange);
       mListsPacked[e * 4] = unorm(q.x);
       mListsPacked[e * 4 + 1] = unorm(q.y);
       mListsPacked[e * 4 + 2] = std::max<uint8_t>(1, unorm(mLists[e * 4 + 2] / mMaxSpriteSize));
-      mListsPacked[e * 4 + 3] = uint8_t(std::lround(mLists[e * 4 + 3]));
+      mListsPacked[e * 4 + 3] = uint8_t(uint8_t(std::lround(image)) | (leansBack ? 0x80 : 0));
       uint16_t word = 0;
       for (int c = 0; c < 4; ++c)
         word = uint16_t(word << 4 | uint16_t(std::lround(mAmbient[e * 4 + c] / 255.0f * 15.0f)));
@@ -422,6 +430,7 @@ class MultilayerIndirect final : public Method {
     g.VertexAttribIPointer(8, 4, GL_INT, sizeof(Vertex),
                            reinterpret_cast<const void*>(offsetof(Vertex, hash)));
     attribute(9, 2, offsetof(Vertex, halfExtents));
+    attribute(10, 3, offsetof(Vertex, tangent));
     g.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, mIbo.id());
     g.BindVertexArray(0);
     g.BindBuffer(GL_ARRAY_BUFFER, 0);
@@ -436,6 +445,8 @@ class MultilayerIndirect final : public Method {
     program.set("uAmbientOcclusion", 4);
     program.set("uListsWidth", kListsWidth);
     program.set("uImagesPerSide", mParams.bins.tilts * mParams.bins.rotations);
+    program.set("uRotations", mParams.bins.rotations);
+    program.set("uTilts", mParams.bins.tilts);
     program.set("uLodFactor", mParams.lodFactor);
     program.set("uListsPacked", packed() ? 1 : 0);
     program.set("uPositionRange", mPositionRange);

@@ -8,6 +8,7 @@ in vec2 vUv;
 in vec2 vLowResUv;
 flat in ivec4 vHash;
 flat in vec2 vHalfExtents;
+flat in vec3 vTangent;
 
 uniform usampler2D uHash;        // R32UI: (list start << 8) | list length, 0 when empty
 uniform sampler2D uLists;        // RGBA16F: leaf position (xy, plane units), image side, image
@@ -16,6 +17,8 @@ uniform sampler2D uLowRes;       // the layered representation, captured at low 
 uniform sampler2D uAmbientOcclusion;  // RGBA8 like the lists: ambient term at the sprite's corners
 uniform int uListsWidth;
 uniform int uImagesPerSide;      // tilts × rotations: offset between front and back images
+uniform int uRotations;          // orientation bins of the Leaves Texture
+uniform int uTilts;
 uniform float uLodFactor;        // entries = factor × projected hash-texel diagonal (px); 0: all
 uniform int uLit;
 uniform vec3 uLightDirection;
@@ -26,11 +29,29 @@ uniform float uMaxSpriteSize;    // packed sizes are fractions of it (plane unit
 
 out vec4 outColor;
 
-// Albedo, or two-sided Lambert whose ambient term is scaled by the ambient occlusion (§5.2).
-vec3 shade(vec3 albedo, float occlusion) {
+// Albedo, or two-sided Lambert (normal facing the viewer) whose ambient term is scaled by the
+// ambient occlusion (§5.2).
+vec3 shade(vec3 albedo, float occlusion, vec3 normal) {
   if (uLit == 0) return albedo;
-  vec3 normal = normalize(gl_FrontFacing ? vNormal : -vNormal);
   return albedo * (uAmbient * occlusion + (1.0 - uAmbient) * max(dot(normal, uLightDirection), 0.0));
+}
+
+// The normal of a leaf drawn with oriented image `index` (relative to the billboard's front):
+// in the billboard frame it leans from the billboard normal by the bin's mean foreshortening,
+// across the leaf's axis, to the side `roll` says (§5.2 relighting, flat leaves). Returned facing
+// the viewer's side of the leaf.
+vec3 leafNormal(int index, float roll, bool fromFront) {
+  int rotation = index % uRotations;
+  int tilt = (index / uRotations) % uTilts;
+  bool back = (index / uImagesPerSide) % 2 == 1;
+  float angle = float(rotation) * 6.28318530718 / float(uRotations);
+  vec2 across = vec2(-sin(angle), cos(angle));
+  float facing = (float(tilt) + 0.5) / float(uTilts);
+  vec3 local = vec3(roll * sqrt(max(1.0 - facing * facing, 0.0)) * across, back ? -facing : facing);
+  vec3 n = normalize(vNormal);
+  vec3 t = normalize(vTangent - dot(vTangent, n) * n);
+  vec3 leaf = normalize(local.x * t + local.y * cross(n, t) + local.z * n);
+  return ((dot(leaf, n) >= 0.0) == fromFront) ? leaf : -leaf;
 }
 
 void main() {
@@ -54,9 +75,13 @@ void main() {
     if (uListsPacked != 0) {  // back to plane units
       vec2 cellSize = 2.0 * vHalfExtents / vec2(vHash.zw);
       vec2 inCell = entry.xy * (1.0 + 2.0 * uPositionRange) - uPositionRange;
+      float packedImage = floor(entry.w * 255.0 + 0.5);  // bit 7: the leaf leans back
+      float image = mod(packedImage, 128.0);
       entry = vec4(-vHalfExtents + (vec2(cell) + inCell) * cellSize, entry.z * uMaxSpriteSize,
-                   floor(entry.w * 255.0 + 0.5));
+                   packedImage >= 128.0 ? -image - 1.0 : image);
     }
+    float roll = entry.w < 0.0 ? -1.0 : 1.0;
+    entry.w = entry.w < 0.0 ? -entry.w - 1.0 : entry.w;
     vec2 local = (plane - entry.xy) / entry.z + 0.5;
     if (any(lessThan(local, vec2(0.0))) || any(greaterThanEqual(local, vec2(1.0)))) continue;
     float image = entry.w;
@@ -70,14 +95,14 @@ void main() {
     if (texel.a >= 0.5) {
       vec4 corners = texelFetch(uAmbientOcclusion, ivec2(k % uListsWidth, k / uListsWidth), 0);
       float occlusion = mix(mix(corners.x, corners.y, local.x), mix(corners.w, corners.z, local.x), local.y);
-      outColor = vec4(shade(texel.rgb, occlusion), 1.0);
+      outColor = vec4(shade(texel.rgb, occlusion, leafNormal(int(entry.w + 0.5), roll, fromFront)), 1.0);
       return;
     }
   }
   if (budget < listLength) {
     vec4 texel = texture(uLowRes, vLowResUv);
     if (texel.a >= 0.5) {
-      outColor = vec4(shade(texel.rgb, 1.0), 1.0);
+      outColor = vec4(shade(texel.rgb, 1.0, normalize(gl_FrontFacing ? vNormal : -vNormal)), 1.0);
       return;
     }
   }

@@ -6,6 +6,7 @@ layout(location = 3) in vec2 inUv;           // over the billboard, [0, 1]²
 layout(location = 4) in mat4 inModel;        // per instance, locations 4..7
 layout(location = 8) in ivec4 inHash;        // first cell in the hash atlas (xy), cells (zw)
 layout(location = 9) in vec2 inHalfExtents;  // of the billboard rectangle
+layout(location = 10) in vec3 inTangent;     // the billboard's first axis
 
 uniform mat4 uViewProjection;
 
@@ -14,6 +15,7 @@ out vec2 vUv;
 out vec2 vLowResUv;
 flat out ivec4 vHash;
 flat out vec2 vHalfExtents;
+flat out vec3 vTangent;
 
 void main() {
   vNormal = mat3(inModel) * inNormal;
@@ -21,5 +23,6 @@ void main() {
   vLowResUv = inLowResUv;
   vHash = inHash;
   vHalfExtents = inHalfExtents;
+  vTangent = mat3(inModel) * inTangent;
   gl_Position = uViewProjection * (inModel * vec4(inPosition, 1.0));
 }

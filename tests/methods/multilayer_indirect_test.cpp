@@ -106,13 +106,18 @@ struct TwoRenders {
   ImageRgba8 reference, method;
 };
 TwoRenders renderBoth(const Tree& tree, const nlohmann::json& params, glm::vec3 normal,
-                      glm::vec3 up, float fov = 3.0f) {
+                      glm::vec3 up, float fov = 3.0f, const glm::vec3* light = nullptr) {
   auto context = test::makeTestContext();
   gl::Ledger ledger;
   gl::Device device(ledger);
   RenderSettings settings;
   settings.width = settings.height = 128;
   settings.fovYDegrees = fov;
+  if (light) {
+    settings.shading = Shading::kLit;
+    settings.lightDirection = *light;
+    settings.ambient = 0.2f;
+  }
   Harness harness(device, settings);
   const float radius = tree.boundingSphereRadius();
   Camera camera;
@@ -176,6 +181,64 @@ TEST(MultilayerIndirect, ABillboardWithOneLeafDrawsItWhereThePolygonalLeafIs) {
   // Same place within a pixel, same size within 15 % (quantized tilt and leaf image resampling).
   EXPECT_LT(glm::length(a - b), 1.0f) << a.x << "," << a.y << " vs " << b.x << "," << b.y;
   EXPECT_NEAR(double(methodCount) / double(referenceCount), 1.0, 0.15);
+}
+
+// Mean colour of the covered pixels in the left or right half.
+glm::vec3 meanColour(const ImageRgba8& image, bool left) {
+  glm::dvec3 sum(0.0);
+  long n = 0;
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = left ? 0 : image.width / 2; x < (left ? image.width / 2 : image.width); ++x) {
+      const uint8_t* p = image.at(x, y);
+      if (p[3] < 255) continue;
+      sum += glm::dvec3(p[0], p[1], p[2]);
+      ++n;
+    }
+  }
+  return n ? glm::vec3(sum / double(n)) : glm::vec3(-1.0f);
+}
+
+TEST(MultilayerIndirect, LitLeavesAreShadedWithTheirOwnNormalsNotTheBillboards) {
+  // Two leaves side by side leaning ±51° (|n·z| = 0.625, the centre of tilt bin 2 of 4) about
+  // their vertical axes: one billboard facing +z holds both. A light along the left leaf's
+  // normal makes it bright and the right one dark in the reference; the impostor must agree,
+  // which the billboard's normal alone cannot (it would shade both alike).
+  Tree tree = test::smallTree(50);
+  const float facing = 0.625f, lean = std::sqrt(1.0f - facing * facing);
+  std::vector<Leaf> leaves;
+  for (const float side : {-1.0f, 1.0f}) {
+    Leaf leaf = tree.leaves[0];
+    leaf.center = {side * 0.6f, 1.0f, 0.0f};
+    leaf.axisV = {0, 1, 0};
+    leaf.normal = glm::normalize(glm::vec3(side * lean, 0.0f, facing));
+    leaf.axisU = glm::normalize(glm::cross(leaf.axisV, leaf.normal));
+    leaf.halfExtents = {0.2f, 0.3f};
+    leaf.branch = -1;
+    leaves.push_back(leaf);
+  }
+  tree.leaves = leaves;
+  tree.branches.clear();
+  tree.wood = {};
+  tree.woodMaterials.clear();
+  finalizeTree(tree, "two leaning leaves");
+  const glm::vec3 light = leaves[0].normal;
+  const auto renders = renderBoth(tree,
+                                  {{"clusters", 1},
+                                   {"lod", false},
+                                   {"wood", false},
+                                   {"ambient_occlusion", false},
+                                   {"rotations", 64},
+                                   {"tilts", 4},
+                                   {"hash_resolution", 16}},
+                                  {0, 0, 1}, {0, 1, 0}, 6.0f, &light);
+  const glm::vec3 refLeft = meanColour(renders.reference, true),
+                  refRight = meanColour(renders.reference, false);
+  const glm::vec3 left = meanColour(renders.method, true),
+                  right = meanColour(renders.method, false);
+  ASSERT_GT(refLeft.g, 1.5f * refRight.g) << "the reference shades them apart";
+  // Same shading within 10 % (the bin's mean foreshortening and 64 in-plane angles).
+  EXPECT_NEAR(left.g, refLeft.g, 0.1f * refLeft.g);
+  EXPECT_NEAR(right.g, refRight.g, 0.1f * refLeft.g);
 }
 
 TEST(MultilayerIndirect, ShaderLodWithAllEntriesEqualsFullEvaluation) {
