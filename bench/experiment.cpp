@@ -123,6 +123,11 @@ ViewSettings parseViews(ConfigObject& config) {
                     config.keyPath("light_direction"));
   }
   render.ambient = readNumber<float>(config, "ambient", render.ambient, 0.0f, 1.0f);
+  render.shadows = config.get<bool>("shadows", false);
+  if (render.shadows && render.shading != Shading::kLit)
+    throwInputError("config {}: shadows need \"shading\": \"lit\"", config.keyPath("shadows"));
+  render.shadowMapSize =
+      readNumber<int>(config, "shadow_map_size", render.shadowMapSize, 64, 16384);
   views.distances = readList<float>(config, "distances", views.distances, 1.01f, 10000.0f);
   views.elevations = readList<float>(config, "elevations", views.elevations, -90.0f, 90.0f);
   views.azimuths = readNumber<int>(config, "azimuths", views.azimuths, 1, 360);

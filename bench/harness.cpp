@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 
 namespace canopy {
 
@@ -76,13 +77,61 @@ ImageRgbaF Harness::renderLinear(Method& method, const Camera& camera) {
   return renderLinearAt(method, camera, mSettings.width, mSettings.height);
 }
 
+Aabb forestBounds(const std::vector<Instance>& forest, const Aabb& tree) {
+  Aabb bounds;
+  for (const Instance& instance : forest) {
+    const glm::mat4 model = instance.modelMatrix();
+    for (int c = 0; c < 8; ++c) {
+      const glm::vec3 corner(c & 1 ? tree.max.x : tree.min.x, c & 2 ? tree.max.y : tree.min.y,
+                             c & 4 ? tree.max.z : tree.min.z);
+      bounds.extend(glm::vec3(model * glm::vec4(corner, 1.0f)));
+    }
+  }
+  return bounds;
+}
+
+void Harness::prepareShadows(Method& method, FrameContext& frame, const Aabb& scene) {
+  if (!mSettings.shadows || mSettings.shading != Shading::kLit || scene.empty()) return;
+  const gl::Api& g = gl::api();
+  if (mShadowMap.size != mSettings.shadowMapSize) {
+    gl::Device::OwnerScope owner(mDevice, "harness");
+    mShadowMap = mDevice.createShadowMap(mSettings.shadowMapSize);
+  }
+  const glm::vec3 light = glm::normalize(mSettings.lightDirection), center = scene.center();
+  const float radius = std::max(0.5f * glm::length(scene.extent()), 1e-4f);
+  const glm::vec3 up = std::abs(light.y) > 0.99f ? glm::vec3(0, 0, 1) : glm::vec3(0, 1, 0);
+  FrameContext shadow = frame;
+  shadow.view = glm::lookAt(center + light * (2.0f * radius), center, up);
+  shadow.projection = glm::ortho(-radius, radius, -radius, radius, 0.5f * radius, 3.5f * radius);
+  shadow.viewportSize = {mShadowMap.size, mShadowMap.size};
+  shadow.shading = Shading::kUnlit;  // depth only; LoD still follows frame.cameraPosition
+  shadow.shadowMap = 0;
+  g.BindFramebuffer(GL_FRAMEBUFFER, mShadowMap.framebuffer.id());
+  g.Viewport(0, 0, mShadowMap.size, mShadowMap.size);
+  g.Enable(GL_DEPTH_TEST);
+  g.DepthFunc(GL_LESS);
+  g.DepthMask(GL_TRUE);
+  g.Disable(GL_BLEND);
+  g.Clear(GL_DEPTH_BUFFER_BIT);
+  g.Enable(GL_POLYGON_OFFSET_FILL);
+  g.PolygonOffset(1.5f, 4.0f);
+  method.draw(shadow, std::span(mUploadedInstances));
+  g.Disable(GL_POLYGON_OFFSET_FILL);
+  frame.shadowMap = mShadowMap.depth.id();
+  frame.lightViewProjection = shadow.projection * shadow.view;
+  g.ActiveTexture(GL_TEXTURE0 + kShadowMapUnit);
+  g.BindTexture(GL_TEXTURE_2D, frame.shadowMap);
+  g.ActiveTexture(GL_TEXTURE0);
+}
+
 ImageRgbaF Harness::renderLinearAt(Method& method, const Camera& camera, int width, int height) {
   const int s = mSettings.supersample;
   gl::RenderTarget& target = targetOfSize(width * s, height * s);
   uploadInstances({Instance{}});
+  FrameContext frame = makeFrame(camera, target.width, target.height, mInstances.id());
+  prepareShadows(method, frame, mTreeBounds);
   beginFrame(target);
-  method.draw(makeFrame(camera, target.width, target.height, mInstances.id()),
-              std::span(mUploadedInstances));
+  method.draw(frame, std::span(mUploadedInstances));
   const gl::Api& g = gl::api();
   ImageRgbaF full(target.width, target.height);
   g.BindFramebuffer(GL_FRAMEBUFFER, target.framebuffer.id());
@@ -126,6 +175,7 @@ FrameTimes Harness::timeForest(Method& method, const std::vector<Instance>& fore
   gl::RenderTarget& target = targetOfSize(width, height);
   uploadInstances(forest);
   const gl::Api& g = gl::api();
+  const Aabb scene = forestBounds(forest, treeBounds);
   std::vector<double> times;
   g.Finish();
   for (int i = 0; i < warmup + frames; ++i) {
@@ -134,8 +184,10 @@ FrameTimes Harness::timeForest(Method& method, const std::vector<Instance>& fore
         path.empty() ? forestCamera(forest, treeBounds, pathFrame, frames, mSettings.fovYDegrees)
                      : path[size_t(i) % path.size()];
     const auto start = std::chrono::steady_clock::now();
+    FrameContext frameContext = makeFrame(camera, width, height, mInstances.id());
+    prepareShadows(method, frameContext, scene);
     beginFrame(target);
-    method.draw(makeFrame(camera, width, height, mInstances.id()), std::span(mUploadedInstances));
+    method.draw(frameContext, std::span(mUploadedInstances));
     g.Finish();
     const auto end = std::chrono::steady_clock::now();
     if (i >= warmup)
@@ -152,8 +204,10 @@ ImageRgba8 Harness::renderForestFrame(Method& method, const std::vector<Instance
   gl::RenderTarget& target = targetOfSize(width, height);
   uploadInstances(forest);
   const Camera camera = forestCamera(forest, treeBounds, frame, frames, mSettings.fovYDegrees);
+  FrameContext frameContext = makeFrame(camera, width, height, mInstances.id());
+  prepareShadows(method, frameContext, forestBounds(forest, treeBounds));
   beginFrame(target);
-  method.draw(makeFrame(camera, width, height, mInstances.id()), std::span(mUploadedInstances));
+  method.draw(frameContext, std::span(mUploadedInstances));
   ImageRgbaF image(width, height);
   const gl::Api& g = gl::api();
   g.ReadPixels(0, 0, width, height, GL_RGBA, GL_FLOAT, image.pixels.data());

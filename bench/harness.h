@@ -21,6 +21,8 @@ struct RenderSettings {
   glm::vec3 background{0.5f, 0.6f, 0.75f};     // sRGB, the colour images are composited over
   glm::vec3 lightDirection{0.3f, 0.8f, 0.5f};  // towards the light (normalised on use)
   float ambient = 0.35f;
+  bool shadows = false;      // lit only: a shadow map rendered with the method itself each frame
+  int shadowMapSize = 2048;  // texels per side
 };
 
 struct FrameTimes {
@@ -37,6 +39,8 @@ class Harness {
 
   const RenderSettings& settings() const { return mSettings; }
   RenderSettings& settings() { return mSettings; }  // the viewer changes shading live
+  // The single tree's bounds (at the origin), which its shadow map must cover.
+  void setTreeBounds(const Aabb& bounds) { mTreeBounds = bounds; }
 
   // The frame every draw gets, and the GL state every method starts from, bound to `target`:
   // what renderLinear and timeForest use, for callers that draw into their own targets.
@@ -67,6 +71,10 @@ class Harness {
                                int height);
 
  private:
+  // Lit and shadowed frames: renders the method's depth from the light over `scene` (LoD chosen
+  // from the viewer's position, so close trees shadow with full evaluation and far ones with
+  // their coarse levels) and fills the frame's shadow fields, binding the map for the draw.
+  void prepareShadows(Method& method, FrameContext& frame, const Aabb& scene);
   gl::RenderTarget& targetOfSize(int width, int height);
   void uploadInstances(const std::vector<Instance>& instances);
 
@@ -75,7 +83,12 @@ class Harness {
   std::vector<gl::RenderTarget> mTargets;
   gl::Buffer mInstances;
   std::vector<Instance> mUploadedInstances;
+  Aabb mTreeBounds;
+  gl::ShadowMap mShadowMap;
 };
+
+// The bounds of every instance of a tree with bounds `tree`.
+Aabb forestBounds(const std::vector<Instance>& forest, const Aabb& tree);
 
 // Median and 95th percentile (nearest rank) of frame times in milliseconds.
 FrameTimes summarizeFrameTimes(std::vector<double> milliseconds);

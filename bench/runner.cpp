@@ -272,6 +272,7 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
       if (!reference)
         reference = bakeMethod(referenceVariant, tree, device, config.seed, {}, false, {});
     };
+    harness.setTreeBounds(tree.bounds);
     const std::vector<EvalView> views = evaluationViews(tree, config);
     const auto referenceImage = [&](const EvalView& view) -> const ImageRgba8& {
       auto [it, inserted] = referenceImages.try_emplace(view.key);
@@ -410,7 +411,8 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
                {"ssim", metrics.ssim},
                {"coverage_error", metrics.coverageError},
                {"union_pixels", metrics.unionPixels},
-               {"shading", config.views.render.shading == Shading::kLit ? "lit" : "unlit"}});
+               {"shading", config.views.render.shading == Shading::kLit ? "lit" : "unlit"},
+               {"shadows", config.views.render.shadows}});
           store.append(record, prefix + "view|" + view->key);
           progress.advance();
         }

@@ -50,7 +50,14 @@ struct FrameContext {
   float ambient = 0.35f;                       // ambient term of the lit shading
   GLuint instanceBuffer = 0;
   int forcedLevel = -1;  // >= 0: every method with levels of detail draws this level
+  // Lit frames with shadows: the light's depth (bound by the harness to texture unit
+  // kShadowMapUnit, which methods leave alone) and the light's view-projection. 0: no shadows.
+  GLuint shadowMap = 0;
+  glm::mat4 lightViewProjection{1.0f};
 };
+
+// The texture unit the shadow map is bound to during a lit, shadowed draw.
+inline constexpr int kShadowMapUnit = 7;
 
 // A baked impostor written to disk: a folder with asset.json (header) and binary blobs/images.
 // Its size is the method's disk_bytes.

@@ -71,8 +71,10 @@ Texture Device::createTexture(const TextureDesc& desc) {
                        desc.internalFormat == GL_RGBA32UI || desc.internalFormat == GL_RGBA16UI ||
                        desc.internalFormat == GL_R16UI || desc.internalFormat == GL_RGBA8UI ||
                        desc.internalFormat == GL_R8UI || desc.internalFormat == GL_RG16UI;
-  const GLenum format = integer ? GL_RGBA_INTEGER : GL_RGBA;
-  const GLenum type = integer ? GL_UNSIGNED_INT : GL_UNSIGNED_BYTE;
+  const bool depth =
+      desc.internalFormat == GL_DEPTH_COMPONENT24 || desc.internalFormat == GL_DEPTH_COMPONENT32F;
+  const GLenum format = depth ? GL_DEPTH_COMPONENT : integer ? GL_RGBA_INTEGER : GL_RGBA;
+  const GLenum type = depth ? GL_FLOAT : integer ? GL_UNSIGNED_INT : GL_UNSIGNED_BYTE;
   g.BindTexture(desc.target, id);
   uint64_t bytes = 0;
   for (int level = 0, w = desc.width, h = desc.height; level < texture.levels; ++level) {
@@ -194,6 +196,36 @@ RenderTarget Device::createRenderTarget(int width, int height, GLenum colorForma
   return target;
 }
 
+ShadowMap Device::createShadowMap(int size) {
+  const Api& g = api();
+  ShadowMap map;
+  map.size = size;
+  map.depth = createTexture({GL_TEXTURE_2D, size, size, 1, GL_DEPTH_COMPONENT24, false,
+                             MemoryCategory::kOther, "shadow map"});
+  g.BindTexture(GL_TEXTURE_2D, map.depth.id());
+  g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+  g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+  g.BindTexture(GL_TEXTURE_2D, 0);
+  GLuint framebuffer = 0;
+  g.GenFramebuffers(1, &framebuffer);
+  map.framebuffer = GlName<deleteFramebufferName>(framebuffer);
+  g.BindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+  g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, map.depth.id(), 0);
+  const GLenum none = GL_NONE;
+  g.DrawBuffers(1, &none);
+  g.ReadBuffer(GL_NONE);
+  const GLenum status = g.CheckFramebufferStatus(GL_FRAMEBUFFER);
+  g.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  if (status != GL_FRAMEBUFFER_COMPLETE)
+    throw std::runtime_error(fmt::format("shadow map {}² incomplete (0x{:x})", size, status));
+  checkError("createShadowMap");
+  return map;
+}
+
 void setTextureSampling(const Texture& texture, bool linear, bool repeat) {
   const Api& g = api();
   const GLenum target = texture.desc.target;
@@ -212,12 +244,60 @@ void setTextureSampling(const Texture& texture, bool linear, bool repeat) {
 namespace {
 
 // Rewrites driver log lines so they name the shader file: Mesa writes "0:12(5): error",
-// NVIDIA "0(12) : error".
-std::string nameFileInLog(std::string_view path, const std::string& log) {
-  static const std::regex mesa(R"((^|\n)\d+:(\d+)\((\d+)\))");
-  static const std::regex nvidia(R"((^|\n)\d+\((\d+)\) ?)");
-  std::string named = std::regex_replace(log, mesa, fmt::format("$1{}:$2:$3", path));
-  return std::regex_replace(named, nvidia, fmt::format("$1{}:$2", path));
+// NVIDIA "0(12) : error"; the leading number is the source string, which expandIncludes maps
+// to a file (0 the stage's own, k the k-th include).
+std::string nameFileInLog(const std::vector<std::string_view>& paths, const std::string& log) {
+  static const std::regex mesa(R"((^|\n)(\d+):(\d+)\((\d+)\))");
+  static const std::regex nvidia(R"((^|\n)(\d+)\((\d+)\) ?)");
+  const auto fileOf = [&](const std::string& number) {
+    const size_t index = std::stoul(number);
+    return std::string(index < paths.size() ? paths[index] : paths[0]);
+  };
+  const auto rewrite = [&](const std::string& source, const std::regex& pattern, bool column) {
+    std::string result;
+    auto begin = source.cbegin();
+    std::smatch m;
+    while (std::regex_search(begin, source.cend(), m, pattern)) {
+      result.append(begin, m[0].first);
+      result += m[1].str() + fileOf(m[2].str()) + ":" + m[3].str() +
+                (column ? ":" + m[4].str() : std::string());
+      begin = m[0].second;
+    }
+    result.append(begin, source.cend());
+    return result;
+  };
+  return rewrite(rewrite(log, mesa, true), nvidia, false);
+}
+
+// Replaces each `#include "path"` line by the embedded file (one level), numbered as its own
+// source string so compile errors name it, then restores the including file's numbering.
+std::string expandIncludes(const ShaderSource& stage, std::vector<std::string_view>& paths) {
+  static const std::regex include(R"re(^\s*#include\s+"([^"]+)"\s*$)re");
+  paths = {stage.path};
+  std::string out;
+  size_t lineNumber = 0, start = 0;
+  const std::string text(stage.text);
+  while (start <= text.size()) {
+    size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    const std::string line = text.substr(start, end - start);
+    ++lineNumber;
+    std::smatch match;
+    if (std::regex_match(line, match, include)) {
+      const ShaderSource& included = embeddedShader(match[1].str());
+      const std::string includedText(included.text);
+      if (std::regex_search(includedText, std::regex(R"re((^|\n)\s*#include\s)re")))
+        throw std::logic_error(fmt::format("{}: nested #include", included.path));
+      paths.push_back(included.path);
+      out += fmt::format("#line 1 {}\n{}\n#line {} 0\n", paths.size() - 1, included.text,
+                         lineNumber + 1);
+    } else {
+      out += line;
+      out += '\n';
+    }
+    start = end + 1;
+  }
+  return out;
 }
 
 GLenum stageOf(std::string_view path) {
@@ -238,8 +318,10 @@ Program Device::createProgram(const std::vector<ShaderSource>& stages) {
   std::string names;
   for (const ShaderSource& stage : stages) {
     const GLuint shader = g.CreateShader(stageOf(stage.path));
-    const GLchar* text = stage.text.data();
-    const auto length = static_cast<GLint>(stage.text.size());
+    std::vector<std::string_view> sourcePaths;
+    const std::string expanded = expandIncludes(stage, sourcePaths);
+    const GLchar* text = expanded.data();
+    const auto length = static_cast<GLint>(expanded.size());
     g.ShaderSource(shader, 1, &text, &length);
     g.CompileShader(shader);
     GLint ok = 0;
@@ -252,7 +334,7 @@ Program Device::createProgram(const std::vector<ShaderSource>& stages) {
       g.DeleteShader(shader);
       for (GLuint s : shaders) g.DeleteShader(s);
       throw std::runtime_error(
-          fmt::format("shader compile error: {}", nameFileInLog(stage.path, log.c_str())));
+          fmt::format("shader compile error: {}", nameFileInLog(sourcePaths, log.c_str())));
     }
     g.AttachShader(program.id(), shader);
     shaders.push_back(shader);

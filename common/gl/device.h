@@ -107,6 +107,14 @@ struct RenderTarget {
   LedgerEntry depthEntry;
 };
 
+// A depth texture (compare mode on, for sampler2DShadow) and its framebuffer: a directional
+// light's shadow map.
+struct ShadowMap {
+  GlName<deleteFramebufferName> framebuffer;
+  Texture depth;
+  int size = 0;
+};
+
 struct ShaderSource {
   std::string_view path;  // source file relative to the repository, named in errors
   std::string_view text;
@@ -180,6 +188,7 @@ class Device {
                           const void* pixels);
 
   RenderTarget createRenderTarget(int width, int height, GLenum colorFormat);
+  ShadowMap createShadowMap(int size);
 
   Program createProgram(const std::vector<ShaderSource>& stages);
 

@@ -9,9 +9,7 @@ uniform int uLeafMode;               // 0: box image from uAtlas; 1: leaf from u
 uniform sampler2D uAtlas;
 uniform sampler2DArray uLeafImages;  // per leaf texture k: layer 2k front, 2k + 1 back
 uniform int uTwoSided;               // 1 when back images differ from the front
-uniform int uLit;
-uniform vec3 uLightDirection;
-uniform float uAmbient;
+#include "methods/common/lighting.glsl"
 
 out vec4 outColor;
 
@@ -38,7 +36,7 @@ void main() {
   vec3 color = texel.rgb;
   if (uLit != 0) {
     vec3 normal = normalize(gl_FrontFacing ? vNormal : -vNormal);
-    color *= uAmbient + (1.0 - uAmbient) * max(dot(normal, uLightDirection), 0.0);
+    color *= lighting(normal, 1.0);
   }
   outColor = vec4(color, 1.0);
 }

@@ -12,6 +12,7 @@ uniform mat4 uViewProjection;
 out vec3 vNormal;
 out vec2 vUv;
 flat out vec2 vDissolve;
+out vec3 vWorldPosition;
 
 void main() {
   mat4 model = inModel;
@@ -20,5 +21,7 @@ void main() {
   model[1][3] = 0.0;
   vNormal = mat3(model) * inNormal;
   vUv = inUv;
-  gl_Position = uViewProjection * (model * vec4(inPosition, 1.0));
+  vec4 world = model * vec4(inPosition, 1.0);
+  vWorldPosition = world.xyz;
+  gl_Position = uViewProjection * world;
 }

@@ -36,6 +36,9 @@ void setFrameUniforms(const gl::Program& program, const FrameContext& frame) {
   program.set("uLit", frame.shading == Shading::kLit ? 1 : 0);
   program.set("uLightDirection", frame.lightDirection);
   program.set("uAmbient", frame.ambient);
+  program.set("uShadows", frame.shadowMap != 0 && frame.shading == Shading::kLit ? 1 : 0);
+  program.set("uShadowMap", kShadowMapUnit);
+  program.set("uLightViewProjection", frame.lightViewProjection);
 }
 
 void WoodRenderer::bake(const Tree& tree) {

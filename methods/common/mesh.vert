@@ -9,11 +9,13 @@ uniform mat4 uViewProjection;
 
 out vec3 vNormal;
 out vec2 vUv;
+out vec3 vWorldPosition;
 
 void main() {
   vec4 world = inModel * vec4(inPosition, 1.0);
   // Instances are rotations about up and uniform scales, so the model matrix maps normals too.
   vNormal = mat3(inModel) * inNormal;
   vUv = inUv;
+  vWorldPosition = world.xyz;
   gl_Position = uViewProjection * world;
 }

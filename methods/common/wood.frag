@@ -6,9 +6,7 @@ in vec2 vUv;
 uniform sampler2D uWoodTexture;  // sRGB, so samples are linear
 uniform int uHasTexture;
 uniform vec3 uBaseColor;         // linear
-uniform int uLit;
-uniform vec3 uLightDirection;
-uniform float uAmbient;
+#include "methods/common/lighting.glsl"
 
 out vec4 outColor;
 
@@ -17,7 +15,7 @@ void main() {
   if (uHasTexture != 0) color *= texture(uWoodTexture, vUv).rgb;
   if (uLit != 0) {
     vec3 normal = normalize(gl_FrontFacing ? vNormal : -vNormal);
-    color *= uAmbient + (1.0 - uAmbient) * max(dot(normal, uLightDirection), 0.0);
+    color *= lighting(normal, 1.0);
   }
   outColor = vec4(color, 1.0);
 }

@@ -20,9 +20,7 @@ uniform int uImagesPerSide;      // tilts × rotations: offset between front and
 uniform int uRotations;          // orientation bins of the Leaves Texture
 uniform int uTilts;
 uniform float uLodFactor;        // entries = factor × projected hash-texel diagonal (px); 0: all
-uniform int uLit;
-uniform vec3 uLightDirection;
-uniform float uAmbient;
+#include "methods/common/lighting.glsl"
 uniform int uListsPacked;        // 1: RGBA8 lists (position in its cell, size fraction, image)
 uniform float uPositionRange;    // packed positions span [-range, 1 + range] cells
 uniform float uMaxSpriteSize;    // packed sizes are fractions of it (plane units)
@@ -31,10 +29,7 @@ out vec4 outColor;
 
 // Albedo, or two-sided Lambert (normal facing the viewer) whose ambient term is scaled by the
 // ambient occlusion (§5.2).
-vec3 shade(vec3 albedo, float occlusion, vec3 normal) {
-  if (uLit == 0) return albedo;
-  return albedo * (uAmbient * occlusion + (1.0 - uAmbient) * max(dot(normal, uLightDirection), 0.0));
-}
+vec3 shade(vec3 albedo, float occlusion, vec3 normal) { return albedo * lighting(normal, occlusion); }
 
 // The normal of a leaf drawn with oriented image `index` (relative to the billboard's front):
 // in the billboard frame it leans from the billboard normal by the bin's mean foreshortening,

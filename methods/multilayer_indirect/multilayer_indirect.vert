@@ -11,6 +11,7 @@ layout(location = 10) in vec3 inTangent;     // the billboard's first axis
 uniform mat4 uViewProjection;
 
 out vec3 vNormal;
+out vec3 vWorldPosition;
 out vec2 vUv;
 out vec2 vLowResUv;
 flat out ivec4 vHash;
@@ -24,5 +25,7 @@ void main() {
   vHash = inHash;
   vHalfExtents = inHalfExtents;
   vTangent = mat3(inModel) * inTangent;
-  gl_Position = uViewProjection * (inModel * vec4(inPosition, 1.0));
+  vec4 world = inModel * vec4(inPosition, 1.0);
+  vWorldPosition = world.xyz;
+  gl_Position = uViewProjection * world;
 }

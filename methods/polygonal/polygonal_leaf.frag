@@ -5,9 +5,7 @@ in vec2 vUv;
 
 uniform sampler2DArray uLeafImages;  // layer 0 front, uBackLayer back; sRGB, so samples are linear
 uniform float uBackLayer;            // 1 for two-sided images, 0 when the back is the front
-uniform int uLit;
-uniform vec3 uLightDirection;
-uniform float uAmbient;
+#include "methods/common/lighting.glsl"
 
 out vec4 outColor;
 
@@ -17,7 +15,7 @@ void main() {
   vec3 color = texel.rgb;
   if (uLit != 0) {
     vec3 normal = normalize(gl_FrontFacing ? vNormal : -vNormal);
-    color *= uAmbient + (1.0 - uAmbient) * max(dot(normal, uLightDirection), 0.0);
+    color *= lighting(normal, 1.0);
   }
   outColor = vec4(color, 1.0);  // premultiplied: opaque after the alpha test
 }

@@ -7,9 +7,7 @@ flat in ivec4 vGrid;
 
 uniform usampler2D uCells;        // R16UI: 0 empty, else 1 + leaf image index
 uniform sampler2DArray uLeaves;   // oriented leaf images, sRGB
-uniform int uLit;
-uniform vec3 uLightDirection;
-uniform float uAmbient;
+#include "methods/common/lighting.glsl"
 
 out vec4 outColor;
 
@@ -24,7 +22,7 @@ void main() {
   vec3 color = texel.rgb;
   if (uLit != 0) {
     vec3 normal = normalize(gl_FrontFacing ? vNormal : -vNormal);
-    color *= uAmbient + (1.0 - uAmbient) * max(dot(normal, uLightDirection), 0.0);
+    color *= lighting(normal, 1.0);
   }
   outColor = vec4(color, 1.0);
 }

@@ -8,6 +8,7 @@ layout(location = 4) in mat4 inModel;   // per instance, locations 4..7
 uniform mat4 uViewProjection;
 
 out vec3 vNormal;
+out vec3 vWorldPosition;
 out vec2 vUv;
 flat out ivec4 vGrid;
 
@@ -15,5 +16,7 @@ void main() {
   vNormal = mat3(inModel) * inNormal;
   vUv = inUv;
   vGrid = inGrid;
-  gl_Position = uViewProjection * (inModel * vec4(inPosition, 1.0));
+  vec4 world = inModel * vec4(inPosition, 1.0);
+  vWorldPosition = world.xyz;
+  gl_Position = uViewProjection * world;
 }

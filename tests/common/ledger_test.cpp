@@ -76,14 +76,40 @@ TEST(Shaders, CompileErrorsNameTheFileAndLine) {
   }
 }
 
+TEST(Shaders, IncludesExpandAndErrorsNameTheRightFileAndLine) {
+  auto context = test::makeTestContext();
+  Ledger ledger;
+  Device device(ledger);
+  // After the include, the including file's own line numbers still hold.
+  const char* broken =
+      "#version 430 core\n#include \"methods/common/lighting.glsl\"\nout vec4 c;\n"
+      "void main() {\n  c = vec4(lighting(vec3(0, 1, 0), 1.0) * undefinedThing);\n}\n";
+  try {
+    device.createProgram({{"methods/x/includes.frag", broken}});
+    FAIL() << "expected a compile error";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("methods/x/includes.frag:5"), std::string::npos)
+        << error.what();
+  }
+  // The included code itself compiles and links into a working program.
+  const char* fine =
+      "#version 430 core\n#include \"methods/common/lighting.glsl\"\nout vec4 c;\n"
+      "void main() { c = vec4(lighting(vec3(0, 1, 0), 1.0)); }\n";
+  const char* vertex =
+      "#version 430 core\nout vec3 vWorldPosition;\n"
+      "void main() { vWorldPosition = vec3(0); gl_Position = vec4(0, 0, 0, 1); }\n";
+  EXPECT_NO_THROW(device.createProgram(
+      {{"methods/x/includes.vert", vertex}, {"methods/x/includes_fine.frag", fine}}));
+}
+
 TEST(Shaders, EveryShaderFileIsEmbeddedVerbatim) {
   namespace fs = std::filesystem;
   int found = 0;
-  for (const char* folder : {"common", "methods"}) {
+  for (const char* folder : {"common", "methods", "viewer"}) {
     for (const auto& entry :
          fs::recursive_directory_iterator(fs::path(CANOPY_SOURCE_DIR) / folder)) {
       const std::string extension = entry.path().extension().string();
-      if (extension != ".vert" && extension != ".frag") continue;
+      if (extension != ".vert" && extension != ".frag" && extension != ".glsl") continue;
       const std::string relative = fs::relative(entry.path(), CANOPY_SOURCE_DIR).string();
       std::ifstream in(entry.path(), std::ios::binary);
       const std::string text((std::istreambuf_iterator<char>(in)),
