@@ -90,7 +90,8 @@ Aabb forestBounds(const std::vector<Instance>& forest, const Aabb& tree) {
   return bounds;
 }
 
-void Harness::prepareShadows(Method& method, FrameContext& frame, const Aabb& scene) {
+void Harness::prepareShadows(Method& method, FrameContext& frame,
+                             std::span<const Instance> instances, const Aabb& scene) {
   if (!mSettings.shadows || mSettings.shading != Shading::kLit || scene.empty()) return;
   const gl::Api& g = gl::api();
   if (mShadowMap.size != mSettings.shadowMapSize) {
@@ -115,7 +116,7 @@ void Harness::prepareShadows(Method& method, FrameContext& frame, const Aabb& sc
   g.Clear(GL_DEPTH_BUFFER_BIT);
   g.Enable(GL_POLYGON_OFFSET_FILL);
   g.PolygonOffset(1.5f, 4.0f);
-  method.draw(shadow, std::span(mUploadedInstances));
+  method.draw(shadow, instances);
   g.Disable(GL_POLYGON_OFFSET_FILL);
   frame.shadowMap = mShadowMap.depth.id();
   frame.lightViewProjection = shadow.projection * shadow.view;
@@ -129,7 +130,7 @@ ImageRgbaF Harness::renderLinearAt(Method& method, const Camera& camera, int wid
   gl::RenderTarget& target = targetOfSize(width * s, height * s);
   uploadInstances({Instance{}});
   FrameContext frame = makeFrame(camera, target.width, target.height, mInstances.id());
-  prepareShadows(method, frame, mTreeBounds);
+  prepareShadows(method, frame, std::span(mUploadedInstances), mTreeBounds);
   beginFrame(target);
   method.draw(frame, std::span(mUploadedInstances));
   const gl::Api& g = gl::api();
@@ -185,7 +186,7 @@ FrameTimes Harness::timeForest(Method& method, const std::vector<Instance>& fore
                      : path[size_t(i) % path.size()];
     const auto start = std::chrono::steady_clock::now();
     FrameContext frameContext = makeFrame(camera, width, height, mInstances.id());
-    prepareShadows(method, frameContext, scene);
+    prepareShadows(method, frameContext, std::span(mUploadedInstances), scene);
     beginFrame(target);
     method.draw(frameContext, std::span(mUploadedInstances));
     g.Finish();
@@ -205,7 +206,8 @@ ImageRgba8 Harness::renderForestFrame(Method& method, const std::vector<Instance
   uploadInstances(forest);
   const Camera camera = forestCamera(forest, treeBounds, frame, frames, mSettings.fovYDegrees);
   FrameContext frameContext = makeFrame(camera, width, height, mInstances.id());
-  prepareShadows(method, frameContext, forestBounds(forest, treeBounds));
+  prepareShadows(method, frameContext, std::span(mUploadedInstances),
+                 forestBounds(forest, treeBounds));
   beginFrame(target);
   method.draw(frameContext, std::span(mUploadedInstances));
   ImageRgbaF image(width, height);

@@ -70,11 +70,14 @@ class Harness {
                                const Aabb& treeBounds, int frame, int frames, int width,
                                int height);
 
+  // Lit and shadowed frames (settings().shadows): renders the method's depth from the light over
+  // `scene` (LoD chosen from the viewer's position, so close trees shadow with full evaluation and
+  // far ones with their coarse levels) and fills the frame's shadow fields, binding the map for
+  // the draw that follows. Does nothing for unlit frames.
+  void prepareShadows(Method& method, FrameContext& frame, std::span<const Instance> instances,
+                      const Aabb& scene);
+
  private:
-  // Lit and shadowed frames: renders the method's depth from the light over `scene` (LoD chosen
-  // from the viewer's position, so close trees shadow with full evaluation and far ones with
-  // their coarse levels) and fills the frame's shadow fields, binding the map for the draw.
-  void prepareShadows(Method& method, FrameContext& frame, const Aabb& scene);
   gl::RenderTarget& targetOfSize(int width, int height);
   void uploadInstances(const std::vector<Instance>& instances);
 

@@ -24,6 +24,8 @@ int main(int argc, char** argv) {
   app.add_option("--screenshot", options.screenshot, "render --frames frames, save PNG, exit");
   app.add_option("--frames", options.frames, "frames before the scripted screenshot");
   app.add_flag("--hide-ui", options.hideUi, "no ImGui panel");
+  app.add_flag("--lit", options.lit, "lit shading (two-sided Lambert)");
+  app.add_flag("--shadows", options.shadows, "lit shading with shadow maps");
   app.add_option("--view", options.view, "method | split | error (reference vs method)")
       ->check(CLI::IsMember({"method", "split", "error"}));
   app.add_option("--bookmarks", options.bookmarks, "camera bookmarks file (JSON)");

@@ -81,7 +81,8 @@ class Viewer {
     mDevice = std::make_unique<gl::Device>(mLedger);
     RenderSettings settings;
     settings.supersample = 2;
-    settings.shading = mConfigShading;
+    settings.shading = options.lit || options.shadows ? Shading::kLit : mConfigShading;
+    settings.shadows = options.shadows;
     mHarness = std::make_unique<Harness>(*mDevice, settings);
     mComposite = mDevice->createProgram(
         {gl::embeddedShader("viewer/composite.vert"), gl::embeddedShader("viewer/composite.frag")});
@@ -304,10 +305,13 @@ class Viewer {
   void drawInto(const gl::RenderTarget& target, Method& method, const Camera& camera,
                 bool countPrimitives) {
     const gl::Api& g = gl::api();
-    mHarness->beginFrame(target);
     FrameContext frame =
         mHarness->makeFrame(camera, target.width, target.height, mInstanceBuffer.id());
     frame.forcedLevel = mForcedLevel;
+    // The shadow pass (lit, shadows on) renders into its own target, so it comes first.
+    mHarness->prepareShadows(method, frame, std::span(mForest),
+                             forestBounds(mForest, mTree.bounds));
+    mHarness->beginFrame(target);
     if (mWireframe) g.PolygonMode(GL_FRONT_AND_BACK, GL_LINE);
     if (countPrimitives) g.BeginQuery(GL_PRIMITIVES_GENERATED, mPrimitivesQuery);
     method.draw(frame, std::span(mForest));
@@ -420,6 +424,7 @@ class Viewer {
       if (ImGui::Checkbox("lit", &lit))
         mHarness->settings().shading = lit ? Shading::kLit : Shading::kUnlit;
       ImGui::DragFloat3("light", &mHarness->settings().lightDirection.x, 0.01f, -1.0f, 1.0f);
+      ImGui::Checkbox("shadows (lit)", &mHarness->settings().shadows);
     }
     if (ImGui::CollapsingHeader("forest")) {
       bool changed = ImGui::SliderInt("trees", &mForestSize, 1, 1000);

@@ -18,6 +18,8 @@ struct ViewerOptions {
   int frames = 3;
   bool hideUi = false;          // no ImGui panel (clean screenshots)
   std::string view = "method";  // "method", "split" (reference left) or "error" (heat map)
+  bool lit = false;             // two-sided Lambert with the harness's light
+  bool shadows = false;         // lit with a shadow map rendered by the method itself
   std::string bookmarks = "canopy_bookmarks.json";
   std::string cameraPath = "canopy_camera_path.json";
 };

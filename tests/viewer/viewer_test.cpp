@@ -56,6 +56,29 @@ INSTANTIATE_TEST_SUITE_P(EveryRegisteredMethod, ViewerScreenshot,
                            return info.param;
                          });
 
+TEST(Viewer, LitShadowedScreenshotIsTheTreeAndDarkerThanUnlit) {
+  test::TempDir dir;
+  for (const char* mode : {"", " --shadows"}) {
+    const auto shot = dir / (std::string(mode).empty() ? "unlit.png" : "shadows.png");
+    std::string error;
+    ASSERT_EQ(test::runCommand("xvfb-run -a " + kView +
+                                   " --tree sparse --leaves 300 --method multilayer_indirect"
+                                   " --width 240 --height 200 --frames 2 --hide-ui" +
+                                   mode + " --screenshot " + shot.string(),
+                               &error),
+              0)
+        << error;
+  }
+  const ImageRgba8 unlit = readImage(dir / "unlit.png"), shadowed = readImage(dir / "shadows.png");
+  long darker = 0, same = 0;
+  for (size_t i = 0; i < unlit.pixels.size(); i += 4) {
+    const bool background = unlit.pixels[i] == 128 && unlit.pixels[i + 1] == 153;
+    if (background) continue;
+    (shadowed.pixels[i + 1] + 2 < unlit.pixels[i + 1] ? darker : same) += 1;
+  }
+  EXPECT_GT(darker, 100) << "lighting and shadows change the leaves";
+}
+
 int errorLines(const std::string& text) {
   return int(std::count(text.begin(), text.end(), '\n'));
 }
