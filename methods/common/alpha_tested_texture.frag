@@ -5,6 +5,8 @@ in vec3 vNormal;
 in vec2 vUv;
 
 uniform sampler2D uAtlas;  // sRGB, so samples are linear
+uniform sampler2D uOcclusion;  // ambient occlusion over the same atlas (R), when uHasOcclusion
+uniform int uHasOcclusion;
 #include "methods/common/lighting.glsl"
 
 out vec4 outColor;
@@ -15,7 +17,7 @@ void main() {
   vec3 color = texel.rgb;
   if (uLit != 0) {
     vec3 normal = normalize(gl_FrontFacing ? vNormal : -vNormal);
-    color *= lighting(normal, 1.0);
+    color *= lighting(normal, uHasOcclusion != 0 ? texture(uOcclusion, vUv).r : 1.0);
   }
   outColor = vec4(color, 1.0);
 }

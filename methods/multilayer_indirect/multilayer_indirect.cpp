@@ -151,11 +151,37 @@ class MultilayerIndirect final : public Method {
     if (mParams.listsPrecision == "8bit") quantizeLists(layered, layeredBillboards);
 
     // The low-resolution texture, baked from the layered representation (§5.1).
-    std::vector<ImageRgba8> lowRes(billboards.size());
-    tbb::parallel_for(size_t(0), billboards.size(),
-                      [&](size_t i) { lowRes[i] = captureLayers(*billboards[i], layered[i]); });
+    std::vector<ImageRgba8> lowRes(billboards.size()), lowResOcclusion(billboards.size());
+    tbb::parallel_for(size_t(0), billboards.size(), [&](size_t i) {
+      lowRes[i] = captureLayers(*billboards[i], layered[i], &lowResOcclusion[i]);
+    });
     const ImageAtlas atlas = composeAtlas(lowRes, 4, 8);
     mLowRes = atlas.image;
+    // §5.2 gives the far level its AO in the low-resolution texture's alpha; that alpha is the
+    // alpha-tested coverage here (filtered and mipmapped), and AO written into it moves the
+    // silhouette, so the AO gets its own single-channel texture at a quarter of the resolution
+    // in each axis (AO is smooth; 1/16 of the atlas' texels), laid out like the colour atlas.
+    mLowResOcclusion = {};
+    if (mParams.ambientOcclusion) {
+      constexpr int kFactor = 4;
+      const ImageRgba8 full = composeAtlas(lowResOcclusion, 4, 8).image;
+      mLowResOcclusion = ImageRgba8(std::max(1, (full.width + kFactor - 1) / kFactor),
+                                    std::max(1, (full.height + kFactor - 1) / kFactor));
+      for (int y = 0; y < mLowResOcclusion.height; ++y)
+        for (int x = 0; x < mLowResOcclusion.width; ++x) {
+          int sum = 0, count = 0;
+          for (int dy = 0; dy < kFactor; ++dy)
+            for (int dx = 0; dx < kFactor; ++dx) {
+              const int sx = kFactor * x + dx, sy = kFactor * y + dy;
+              if (sx >= full.width || sy >= full.height) continue;
+              sum += full.at(sx, sy)[0];
+              ++count;
+            }
+          uint8_t* out = mLowResOcclusion.at(x, y);
+          out[0] = out[1] = out[2] = uint8_t((sum + count / 2) / std::max(count, 1));
+          out[3] = 255;
+        }
+    }
 
     mVertices.clear();
     mIndices.clear();
@@ -215,6 +241,18 @@ class MultilayerIndirect final : public Method {
                                           parseCompression(mParams.compression));
     mLowResTexture = uploadAlphaTestedTexture(device, mLowRes, true, "low-resolution atlas",
                                               parseCompression(mParams.compression));
+    if (!mLowResOcclusion.empty()) {
+      std::vector<uint8_t> red(size_t(mLowResOcclusion.width) * mLowResOcclusion.height);
+      for (size_t i = 0; i < red.size(); ++i) red[i] = mLowResOcclusion.pixels[i * 4];
+      mLowResOcclusionTexture = device.createTexture(
+          {GL_TEXTURE_2D, mLowResOcclusion.width, mLowResOcclusion.height, 1, GL_R8, true,
+           MemoryCategory::kTexture, "low-resolution ambient occlusion"});
+      gl::api().PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+      device.uploadTexture(mLowResOcclusionTexture, GL_RED, GL_UNSIGNED_BYTE, red.data());
+      gl::api().PixelStorei(GL_UNPACK_ALIGNMENT, 4);
+      device.generateMipmaps(mLowResOcclusionTexture);
+      gl::setTextureSampling(mLowResOcclusionTexture, true, false);
+    }
     mProgram = device.createProgram(
         {gl::embeddedShader("methods/multilayer_indirect/multilayer_indirect.vert"),
          gl::embeddedShader("methods/multilayer_indirect/multilayer_indirect.frag")});
@@ -237,6 +275,10 @@ class MultilayerIndirect final : public Method {
       setFrameUniforms(program, frame);
       if (far) {
         program.set("uAtlas", 0);
+        program.set("uOcclusion", 1);
+        program.set("uHasOcclusion", mLowResOcclusionTexture.id() ? 1 : 0);
+        g.ActiveTexture(GL_TEXTURE1);
+        g.BindTexture(GL_TEXTURE_2D, mLowResOcclusionTexture.id());
         g.ActiveTexture(GL_TEXTURE0);
         g.BindTexture(GL_TEXTURE_2D, mLowResTexture.id());
       } else {
@@ -276,6 +318,8 @@ class MultilayerIndirect final : public Method {
     for (size_t i = 0; i < mLeafImages.size(); ++i)
       asset.writeImage(fmt::format("leaf_image_{}.png", i), mLeafImages[i]);
     asset.writeImage("lowres.png", mLowRes);
+    header["lowres_occlusion"] = !mLowResOcclusion.empty();
+    if (!mLowResOcclusion.empty()) asset.writeImage("lowres_occlusion.png", mLowResOcclusion);
     mWood.save(asset);
     asset.writeHeader();
   }
@@ -309,6 +353,9 @@ class MultilayerIndirect final : public Method {
     for (size_t i = 0; i < header.at("leaf_images").get<size_t>(); ++i)
       mLeafImages.push_back(asset.readImage(fmt::format("leaf_image_{}.png", i)));
     mLowRes = asset.readImage("lowres.png");
+    mLowResOcclusion = header.value("lowres_occlusion", false)
+                           ? asset.readImage("lowres_occlusion.png")
+                           : ImageRgba8();
     if (mHash.size() != size_t(mHashSize.x) * mHashSize.y ||
         mLists.size() != size_t(kListsWidth) * mListsHeight * 4) {
       throwInputError("{}: hash or lists blob has the wrong size", folder);
@@ -384,13 +431,17 @@ class MultilayerIndirect final : public Method {
 
   // What the full walk shows from the billboard's front, at lowres_texels_per_cell texels per
   // hash cell, 4×4 samples per texel: colour (linear mean) and coverage.
-  ImageRgba8 captureLayers(const Billboard& billboard, const LayeredBillboard& layered) const {
+  // `occlusion` (optional) gets the mean AO of the leaves hit, 1 where nothing is.
+  ImageRgba8 captureLayers(const Billboard& billboard, const LayeredBillboard& layered,
+                           ImageRgba8* occlusion = nullptr) const {
     constexpr int kSamples = 4;
     const glm::ivec2 size = layered.cells * mParams.lowResTexelsPerCell;
     ImageRgba8 image(size.x, size.y);
+    if (occlusion) *occlusion = ImageRgba8(size.x, size.y);
     for (int y = 0; y < size.y; ++y) {
       for (int x = 0; x < size.x; ++x) {
         glm::vec3 sum(0.0f);
+        float ambient = 0.0f;
         int covered = 0;
         for (int sy = 0; sy < kSamples; ++sy) {
           for (int sx = 0; sx < kSamples; ++sx) {
@@ -401,10 +452,18 @@ class MultilayerIndirect final : public Method {
             if (!hit) continue;
             sum += glm::vec3(srgbToLinear(hit->color.r), srgbToLinear(hit->color.g),
                              srgbToLinear(hit->color.b));
+            const glm::vec4& corners = layered.entries[hit->entry].ambient;
+            ambient += 0.25f * (corners.x + corners.y + corners.z + corners.w);
             ++covered;
           }
         }
         writeCoverageTexel(image.at(x, y), sum, covered, kSamples * kSamples);
+        if (occlusion) {
+          uint8_t* out = occlusion->at(x, y);
+          const float value = covered ? ambient / float(covered) : 1.0f;
+          out[0] = out[1] = out[2] = uint8_t(std::lround(255.0f * value));
+          out[3] = image.at(x, y)[3];
+        }
       }
     }
     return image;
@@ -451,6 +510,10 @@ class MultilayerIndirect final : public Method {
     program.set("uListsPacked", packed() ? 1 : 0);
     program.set("uPositionRange", mPositionRange);
     program.set("uMaxSpriteSize", mMaxSpriteSize);
+    program.set("uLowResOcclusion", 5);
+    program.set("uHasLowResOcclusion", mLowResOcclusionTexture.id() ? 1 : 0);
+    g.ActiveTexture(GL_TEXTURE5);
+    g.BindTexture(GL_TEXTURE_2D, mLowResOcclusionTexture.id());
     const std::pair<GLenum, GLuint> units[] = {{GL_TEXTURE_2D, mHashTexture.id()},
                                                {GL_TEXTURE_2D, mListsTexture.id()},
                                                {GL_TEXTURE_2D_ARRAY, mLeavesTexture.id()},
@@ -479,9 +542,11 @@ class MultilayerIndirect final : public Method {
   float mMaxSpriteSize = 0.0f;  // packed sizes are fractions of this (plane units)
   std::vector<ImageRgba8> mLeafImages;
   ImageRgba8 mLowRes;
+  ImageRgba8 mLowResOcclusion;  // AO of the low-resolution atlas at half its resolution (R)
   gl::Buffer mVbo, mIbo;
   gl::VertexArray mVao;
-  gl::Texture mHashTexture, mListsTexture, mLeavesTexture, mLowResTexture, mAmbientTexture;
+  gl::Texture mHashTexture, mListsTexture, mLeavesTexture, mLowResTexture, mAmbientTexture,
+      mLowResOcclusionTexture;
   gl::Program mProgram, mFarProgram;
   LodInstances mLod;
   WoodRenderer mWood;

@@ -21,6 +21,8 @@ uniform int uRotations;          // orientation bins of the Leaves Texture
 uniform int uTilts;
 uniform float uLodFactor;        // entries = factor × projected hash-texel diagonal (px); 0: all
 #include "methods/common/lighting.glsl"
+uniform sampler2D uLowResOcclusion;  // AO over the low-resolution atlas (R)
+uniform int uHasLowResOcclusion;
 uniform int uListsPacked;        // 1: RGBA8 lists (position in its cell, size fraction, image)
 uniform float uPositionRange;    // packed positions span [-range, 1 + range] cells
 uniform float uMaxSpriteSize;    // packed sizes are fractions of it (plane units)
@@ -97,7 +99,8 @@ void main() {
   if (budget < listLength) {
     vec4 texel = texture(uLowRes, vLowResUv);
     if (texel.a >= 0.5) {
-      outColor = vec4(shade(texel.rgb, 1.0, normalize(gl_FrontFacing ? vNormal : -vNormal)), 1.0);
+      float occlusion = uHasLowResOcclusion != 0 ? texture(uLowResOcclusion, vLowResUv).r : 1.0;
+      outColor = vec4(shade(texel.rgb, occlusion, normalize(gl_FrontFacing ? vNormal : -vNormal)), 1.0);
       return;
     }
   }

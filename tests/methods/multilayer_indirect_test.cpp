@@ -241,6 +241,50 @@ TEST(MultilayerIndirect, LitLeavesAreShadedWithTheirOwnNormalsNotTheBillboards) 
   EXPECT_NEAR(right.g, refRight.g, 0.1f * refLeft.g);
 }
 
+TEST(MultilayerIndirect, LowResolutionAmbientOcclusionDarkensOnlyLitFarTrees) {
+  // lod thresholds just past the bounding sphere: from 2.5 radii the far level draws, which is
+  // the low-resolution texture alone (§5.1, §6).
+  LSystemTreeParams shrub = treePreset("shrub");  // dense foliage: the far level covers a lot
+  shrub.leafTextureSize = 64;
+  const Tree tree = generateTree(shrub, 4);
+  auto context = test::makeTestContext();
+  gl::Ledger ledger;
+  gl::Device device(ledger);
+  RenderSettings settings;
+  settings.width = settings.height = 128;
+  Harness harness(device, settings);
+  const Camera camera = orbitCamera(tree.bounds, {2.5f, 20.0f, 40.0f}, 40.0f);
+  std::map<bool, std::unique_ptr<Method>> methods;
+  for (const bool occlusion : {false, true}) {
+    auto m = builtinMethods()
+                 .find("multilayer_indirect")
+                 .create({{"clusters", 100},
+                          {"lod_near", 1.01},
+                          {"lod_far", 1.02},
+                          {"wood", false},
+                          {"ambient_occlusion", occlusion}},
+                         "test");
+    BakeContext ctx;
+    m->bake(tree, ctx);
+    gl::Device::OwnerScope scope(device, occlusion ? "ao" : "plain");
+    m->upload(device);
+    methods[occlusion] = std::move(m);
+  }
+  // Unlit: the AO lives in its own texture, so the images are the same.
+  const ImageRgba8 plainUnlit = harness.render(*methods[false], camera);
+  EXPECT_EQ(harness.render(*methods[true], camera), plainUnlit);
+  long covered = 0;
+  for (size_t i = 3; i < plainUnlit.pixels.size(); i += 4) covered += plainUnlit.pixels[i] > 0;
+  ASSERT_GT(covered, 1000) << "the far level shows the tree";
+  // Lit: the AO scales the ambient term of the far level.
+  harness.settings().shading = Shading::kLit;
+  const double plain = meanColour(harness.render(*methods[false], camera), true).g +
+                       meanColour(harness.render(*methods[false], camera), false).g;
+  const double occluded = meanColour(harness.render(*methods[true], camera), true).g +
+                          meanColour(harness.render(*methods[true], camera), false).g;
+  EXPECT_LT(occluded, plain - 1.0) << "occluded leaves lose ambient light";
+}
+
 TEST(MultilayerIndirect, ShaderLodWithAllEntriesEqualsFullEvaluation) {
   const Tree tree = test::smallTree(800, 4);
   const nlohmann::json base = {{"clusters", 20}, {"lod", false}, {"wood", false}};
