@@ -57,16 +57,22 @@ FrameContext Harness::makeFrame(const Camera& camera, int width, int height,
   return frame;
 }
 
-void Harness::beginFrame(const gl::RenderTarget& target) {
-  const gl::Api& g = gl::api();
-  g.BindFramebuffer(GL_FRAMEBUFFER, target.framebuffer.id());
-  g.Viewport(0, 0, target.width, target.height);
-  // The state every method starts from; methods restore anything else they change.
+namespace {
+// The state every method's draw starts from; methods restore anything else they change.
+void resetDrawState(const gl::Api& g) {
   g.Enable(GL_DEPTH_TEST);
   g.DepthFunc(GL_LESS);
   g.DepthMask(GL_TRUE);
   g.Disable(GL_BLEND);
   g.Disable(GL_CULL_FACE);
+}
+}  // namespace
+
+void Harness::beginFrame(const gl::RenderTarget& target) {
+  const gl::Api& g = gl::api();
+  g.BindFramebuffer(GL_FRAMEBUFFER, target.framebuffer.id());
+  g.Viewport(0, 0, target.width, target.height);
+  resetDrawState(g);
   g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   const float transparent[4] = {0.0f, 0.0f, 0.0f, 0.0f};
   g.ClearBufferfv(GL_COLOR, 0, transparent);
@@ -109,10 +115,7 @@ void Harness::prepareShadows(Method& method, FrameContext& frame,
   shadow.shadowMap = 0;
   g.BindFramebuffer(GL_FRAMEBUFFER, mShadowMap.framebuffer.id());
   g.Viewport(0, 0, mShadowMap.size, mShadowMap.size);
-  g.Enable(GL_DEPTH_TEST);
-  g.DepthFunc(GL_LESS);
-  g.DepthMask(GL_TRUE);
-  g.Disable(GL_BLEND);
+  resetDrawState(g);
   g.Clear(GL_DEPTH_BUFFER_BIT);
   g.Enable(GL_POLYGON_OFFSET_FILL);
   g.PolygonOffset(1.5f, 4.0f);

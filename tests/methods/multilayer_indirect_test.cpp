@@ -241,34 +241,47 @@ TEST(MultilayerIndirect, LitLeavesAreShadedWithTheirOwnNormalsNotTheBillboards) 
   EXPECT_NEAR(right.g, refRight.g, 0.1f * refLeft.g);
 }
 
+// A headless context, ledger and harness, and multilayer_indirect variants baked into it.
+struct VariantBench {
+  std::unique_ptr<gl::Context> context = test::makeTestContext();
+  gl::Ledger ledger;
+  gl::Device device{ledger};
+  Harness harness;
+  explicit VariantBench(int size) : harness(device, sizedSettings(size)) {}
+  static RenderSettings sizedSettings(int size) {
+    RenderSettings settings;
+    settings.width = settings.height = size;
+    return settings;
+  }
+  std::unique_ptr<Method> bake(const Tree& tree, const nlohmann::json& params,
+                               const std::string& owner) {
+    auto m = builtinMethods().find("multilayer_indirect").create(params, "test");
+    BakeContext ctx;
+    m->bake(tree, ctx);
+    gl::Device::OwnerScope scope(device, owner);
+    m->upload(device);
+    return m;
+  }
+};
+
 TEST(MultilayerIndirect, LowResolutionAmbientOcclusionDarkensOnlyLitFarTrees) {
   // lod thresholds just past the bounding sphere: from 2.5 radii the far level draws, which is
   // the low-resolution texture alone (§5.1, §6).
   LSystemTreeParams shrub = treePreset("shrub");  // dense foliage: the far level covers a lot
   shrub.leafTextureSize = 64;
   const Tree tree = generateTree(shrub, 4);
-  auto context = test::makeTestContext();
-  gl::Ledger ledger;
-  gl::Device device(ledger);
-  RenderSettings settings;
-  settings.width = settings.height = 128;
-  Harness harness(device, settings);
+  VariantBench bench(128);
+  Harness& harness = bench.harness;
   const Camera camera = orbitCamera(tree.bounds, {2.5f, 20.0f, 40.0f}, 40.0f);
   std::map<bool, std::unique_ptr<Method>> methods;
   for (const bool occlusion : {false, true}) {
-    auto m = builtinMethods()
-                 .find("multilayer_indirect")
-                 .create({{"clusters", 100},
-                          {"lod_near", 1.01},
-                          {"lod_far", 1.02},
-                          {"wood", false},
-                          {"ambient_occlusion", occlusion}},
-                         "test");
-    BakeContext ctx;
-    m->bake(tree, ctx);
-    gl::Device::OwnerScope scope(device, occlusion ? "ao" : "plain");
-    m->upload(device);
-    methods[occlusion] = std::move(m);
+    methods[occlusion] = bench.bake(tree,
+                                    {{"clusters", 100},
+                                     {"lod_near", 1.01},
+                                     {"lod_far", 1.02},
+                                     {"wood", false},
+                                     {"ambient_occlusion", occlusion}},
+                                    occlusion ? "ao" : "plain");
   }
   // Unlit: the AO lives in its own texture, so the images are the same.
   const ImageRgba8 plainUnlit = harness.render(*methods[false], camera);
@@ -302,24 +315,15 @@ TEST(MultilayerIndirect, ShaderLodWithAllEntriesEqualsFullEvaluation) {
 
 TEST(MultilayerIndirect, EightBitListsDrawLikeFloatListsInHalfTheMemoryAndSurviveSaveLoad) {
   const Tree tree = test::smallTree(800, 4);
-  auto context = test::makeTestContext();
-  gl::Ledger ledger;
-  gl::Device device(ledger);
-  RenderSettings settings;
-  settings.width = settings.height = 160;
-  Harness harness(device, settings);
+  VariantBench bench(160);
+  gl::Ledger& ledger = bench.ledger;
+  gl::Device& device = bench.device;
+  Harness& harness = bench.harness;
   const Camera camera = orbitCamera(tree.bounds, {2.0f, 20.0f, 40.0f}, 40.0f);
   std::map<std::string, std::unique_ptr<Method>> methods;
   for (const std::string precision : {"float16", "8bit"}) {
-    auto m =
-        builtinMethods()
-            .find("multilayer_indirect")
-            .create({{"clusters", 20}, {"lod", false}, {"lists_precision", precision}}, "test");
-    BakeContext ctx;
-    m->bake(tree, ctx);
-    gl::Device::OwnerScope scope(device, precision);
-    m->upload(device);
-    methods[precision] = std::move(m);
+    methods[precision] = bench.bake(
+        tree, {{"clusters", 20}, {"lod", false}, {"lists_precision", precision}}, precision);
   }
   const ImageRgba8 exact = harness.render(*methods["float16"], camera);
   const ImageRgba8 packed = harness.render(*methods["8bit"], camera);
