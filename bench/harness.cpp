@@ -98,7 +98,13 @@ Aabb forestBounds(const std::vector<Instance>& forest, const Aabb& tree) {
 
 void Harness::prepareShadows(Method& method, FrameContext& frame,
                              std::span<const Instance> instances, const Aabb& scene) {
-  if (!mSettings.shadows || mSettings.shading != Shading::kLit || scene.empty()) return;
+  // The shadow pass draws depth only (unlit variant); the frame's draw then uses its shading's.
+  gl::selectLitVariant(false);
+  const bool lit = frame.shading == Shading::kLit;
+  if (!mSettings.shadows || !lit || scene.empty()) {
+    gl::selectLitVariant(lit);
+    return;
+  }
   const gl::Api& g = gl::api();
   if (mShadowMap.size != mSettings.shadowMapSize) {
     gl::Device::OwnerScope owner(mDevice, "harness");
@@ -126,6 +132,7 @@ void Harness::prepareShadows(Method& method, FrameContext& frame,
   g.ActiveTexture(GL_TEXTURE0 + kShadowMapUnit);
   g.BindTexture(GL_TEXTURE_2D, frame.shadowMap);
   g.ActiveTexture(GL_TEXTURE0);
+  gl::selectLitVariant(true);  // the lit draw that follows samples the map
 }
 
 ImageRgbaF Harness::renderLinearAt(Method& method, const Camera& camera, int width, int height) {

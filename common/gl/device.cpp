@@ -310,16 +310,28 @@ GLenum stageOf(std::string_view path) {
 
 }  // namespace
 
-Program Device::createProgram(const std::vector<ShaderSource>& stages) {
+namespace {
+bool gLitVariant = false;
+constexpr std::string_view kLightingInclude = "methods/common/lighting.glsl";
+
+// Compiles and links `stages` (with `define` inserted after each #version line); sets
+// `usesLighting` when a stage includes the shared lighting code.
+GlName<deleteProgramName> buildProgram(const std::vector<ShaderSource>& stages,
+                                       const std::string& define, bool* usesLighting) {
   const Api& g = api();
-  Program program;
-  program.mName = GlName<deleteProgramName>(g.CreateProgram());
+  GlName<deleteProgramName> program(g.CreateProgram());
   std::vector<GLuint> shaders;
   std::string names;
   for (const ShaderSource& stage : stages) {
     const GLuint shader = g.CreateShader(stageOf(stage.path));
     std::vector<std::string_view> sourcePaths;
-    const std::string expanded = expandIncludes(stage, sourcePaths);
+    std::string expanded = expandIncludes(stage, sourcePaths);
+    for (std::string_view path : sourcePaths)
+      if (path == kLightingInclude && usesLighting) *usesLighting = true;
+    if (!define.empty()) {
+      const size_t afterVersion = expanded.find('\n') + 1;
+      expanded.insert(afterVersion, define + "\n#line 2 0\n");
+    }
     const GLchar* text = expanded.data();
     const auto length = static_cast<GLint>(expanded.size());
     g.ShaderSource(shader, 1, &text, &length);
@@ -353,15 +365,31 @@ Program Device::createProgram(const std::vector<ShaderSource>& stages) {
   }
   return program;
 }
+}  // namespace
+
+void selectLitVariant(bool lit) {
+  gLitVariant = lit;
+}
+bool litVariantSelected() {
+  return gLitVariant;
+}
+
+Program Device::createProgram(const std::vector<ShaderSource>& stages) {
+  Program program;
+  bool usesLighting = false;
+  program.mName = buildProgram(stages, "", &usesLighting);
+  if (usesLighting) program.mLitName = buildProgram(stages, "#define CANOPY_LIT 1", nullptr);
+  return program;
+}
 
 void Program::use() const {
   api().UseProgram(id());
 }
 
 GLint Program::location(const char* uniform) const {
-  auto it = mLocations.find(uniform);
-  if (it == mLocations.end())
-    it = mLocations.emplace(uniform, api().GetUniformLocation(id(), uniform)).first;
+  auto& cache = id() == mName.id() ? mLocations : mLitLocations;
+  auto it = cache.find(uniform);
+  if (it == cache.end()) it = cache.emplace(uniform, api().GetUniformLocation(id(), uniform)).first;
   return it->second;
 }
 

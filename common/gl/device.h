@@ -124,10 +124,17 @@ struct ShaderSource {
 // when no such file was embedded (a build mistake, not user input).
 const ShaderSource& embeddedShader(std::string_view path);
 
+// Programs whose shaders include methods/common/lighting.glsl are built twice: unlit, and with
+// CANOPY_LIT defined (lighting, AO, leaf normals, shadow lookups). On a CPU rasteriser code
+// behind a uniform branch still costs every fragment, so unlit frames must not carry it. The
+// harness selects the variant per frame; Program::use/set/id follow the selection.
+void selectLitVariant(bool lit);
+bool litVariantSelected();
+
 class Program {
  public:
   Program() = default;
-  GLuint id() const { return mName.id(); }
+  GLuint id() const { return litVariantSelected() && mLitName.id() ? mLitName.id() : mName.id(); }
   void use() const;
   GLint location(const char* uniform) const;  // -1 when the uniform is unused
   void set(const char* uniform, int value) const;
@@ -139,8 +146,8 @@ class Program {
 
  private:
   friend class Device;
-  GlName<deleteProgramName> mName;
-  mutable std::unordered_map<std::string, GLint> mLocations;
+  GlName<deleteProgramName> mName, mLitName;  // the second only with lighting.glsl
+  mutable std::unordered_map<std::string, GLint> mLocations, mLitLocations;
 };
 
 // The methods' view of the GPU: every allocation goes through it and into the ledger under the

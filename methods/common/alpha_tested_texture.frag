@@ -17,7 +17,9 @@ void main() {
   vec3 color = texel.rgb;
   if (uLit != 0) {
     vec3 normal = normalize(gl_FrontFacing ? vNormal : -vNormal);
+#ifdef CANOPY_LIT
     color *= lighting(normal, uHasOcclusion != 0 ? texture(uOcclusion, vUv).r : 1.0);
+#endif
   }
   outColor = vec4(color, 1.0);
 }

@@ -1,13 +1,17 @@
 // Lighting every lit shader shares (each includes this file): two-sided Lambert with an ambient
 // term, and a directional light's shadow map rendered with the same method — impostors cast the
-// shadows they look like (multi-layer paper §5.2).
+// shadows they look like (multi-layer paper §5.2). Programs that include it are built twice
+// (gl::selectLitVariant): CANOPY_LIT defined for lit frames; without it lighting() is 1 and
+// lit-only code compiles away, since a CPU rasteriser pays for code behind uniform branches.
 uniform int uLit;              // 0: albedo only
 uniform vec3 uLightDirection;  // unit, towards the light (world)
 uniform float uAmbient;        // share of the ambient term
-uniform int uShadows;          // 1: uShadowMap holds the light's depth
+
+#ifdef CANOPY_LIT
+in vec3 vWorldPosition;
+uniform int uShadows;  // 1: uShadowMap holds the light's depth
 uniform sampler2DShadow uShadowMap;
 uniform mat4 uLightViewProjection;
-in vec3 vWorldPosition;
 
 // Fraction of the light reaching the fragment: 3×3 percentage-closer filtering.
 float lightVisibility(vec3 normal) {
@@ -31,3 +35,6 @@ float lighting(vec3 normal, float occlusion) {
   return uAmbient * occlusion +
          (1.0 - uAmbient) * max(dot(normal, uLightDirection), 0.0) * lightVisibility(normal);
 }
+#else
+float lighting(vec3 normal, float occlusion) { return 1.0; }
+#endif

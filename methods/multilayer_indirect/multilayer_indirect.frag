@@ -90,17 +90,28 @@ void main() {
     }
     vec4 texel = textureGrad(uLeaves, vec3(local, image), planeDx / entry.z, planeDy / entry.z);
     if (texel.a >= 0.5) {
+#ifdef CANOPY_LIT
       vec4 corners = texelFetch(uAmbientOcclusion, ivec2(k % uListsWidth, k / uListsWidth), 0);
-      float occlusion = mix(mix(corners.x, corners.y, local.x), mix(corners.w, corners.z, local.x), local.y);
-      outColor = vec4(shade(texel.rgb, occlusion, leafNormal(int(entry.w + 0.5), roll, fromFront)), 1.0);
+      float occlusion =
+          mix(mix(corners.x, corners.y, local.x), mix(corners.w, corners.z, local.x), local.y);
+      outColor = vec4(shade(texel.rgb, occlusion, leafNormal(int(entry.w + 0.5), roll, fromFront)),
+                      1.0);
+#else
+      outColor = vec4(texel.rgb, 1.0);  // unlit: albedo (lit-only work is compiled out)
+#endif
       return;
     }
   }
   if (budget < listLength) {
     vec4 texel = texture(uLowRes, vLowResUv);
     if (texel.a >= 0.5) {
+#ifdef CANOPY_LIT
       float occlusion = uHasLowResOcclusion != 0 ? texture(uLowResOcclusion, vLowResUv).r : 1.0;
-      outColor = vec4(shade(texel.rgb, occlusion, normalize(gl_FrontFacing ? vNormal : -vNormal)), 1.0);
+      outColor =
+          vec4(shade(texel.rgb, occlusion, normalize(gl_FrontFacing ? vNormal : -vNormal)), 1.0);
+#else
+      outColor = vec4(texel.rgb, 1.0);
+#endif
       return;
     }
   }
