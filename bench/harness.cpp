@@ -10,10 +10,10 @@
 
 namespace canopy {
 
+// The light direction is normalised where it is used (makeFrame, prepareShadows): the viewer
+// edits it live.
 Harness::Harness(gl::Device& device, RenderSettings settings)
-    : mDevice(device), mSettings(settings) {
-  mSettings.lightDirection = glm::normalize(mSettings.lightDirection);
-}
+    : mDevice(device), mSettings(settings) {}
 
 gl::RenderTarget& Harness::targetOfSize(int width, int height) {
   for (gl::RenderTarget& target : mTargets) {
@@ -44,7 +44,6 @@ void Harness::uploadInstances(const std::vector<Instance>& instances) {
 
 FrameContext Harness::makeFrame(const Camera& camera, int width, int height,
                                 GLuint instances) const {
-  // Settings may have changed since construction (the viewer): keep the light a unit vector.
   FrameContext frame;
   frame.view = camera.view();
   frame.projection = camera.projection(float(width) / float(height));

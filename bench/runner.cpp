@@ -315,7 +315,8 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
       const std::string prefix = treeLabel + "|" + variant.label + "|";
       const nlohmann::json common = {
           {"tree", treeLabel}, {"method", variant.method}, {"variant", variant.label}};
-      if (tree.captures && builtinMethods().find(variant.method).traits.needsMesh) {
+      const MethodInfo& info = builtinMethods().find(variant.method);
+      if (tree.captures && info.traits.needsMesh) {
         if (!store.has(prefix + "skip")) {
           nlohmann::json record = common;
           record.update({{"kind", "skip"},
@@ -345,7 +346,6 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
       // run takes the value its bake record already holds.
       MethodVariant effective = variant;
       nlohmann::json budgetRecord;
-      const MethodInfo& info = builtinMethods().find(variant.method);
       if (config.budget && info.traits.memoryKnob &&
           !variant.params.contains(info.traits.memoryKnob->parameter)) {
         const MemoryKnob& knob = *info.traits.memoryKnob;

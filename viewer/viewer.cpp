@@ -86,9 +86,8 @@ class Viewer {
     mHarness = std::make_unique<Harness>(*mDevice, settings);
     mComposite = mDevice->createProgram(
         {gl::embeddedShader("viewer/composite.vert"), gl::embeddedShader("viewer/composite.frag")});
-    GLuint vao = 0;
-    gl::api().GenVertexArrays(1, &vao);
-    mEmptyVao = gl::VertexArray{gl::GlName<gl::deleteVertexArrayName>(vao)};
+    mEmptyVao = gl::createVertexArray();
+    gl::api().BindVertexArray(0);
     gl::api().GenQueries(1, &mPrimitivesQuery);
     mForestSize = options.forest;
     mViewMode = options.view == "split" ? 1 : options.view == "error" ? 2 : 0;
@@ -202,6 +201,7 @@ class Viewer {
 
   void layoutTrees() {
     mForest = layoutForest(mForestSize, mTree.boundingSphereRadius(), mForestSeed);
+    mForestBounds = forestBounds(mForest, mTree.bounds);  // the shadow map's extent
     std::vector<glm::mat4> matrices;
     for (const Instance& instance : mForest) matrices.push_back(instance.modelMatrix());
     gl::Device::OwnerScope owner(*mDevice, "viewer");
@@ -309,8 +309,7 @@ class Viewer {
         mHarness->makeFrame(camera, target.width, target.height, mInstanceBuffer.id());
     frame.forcedLevel = mForcedLevel;
     // The shadow pass (lit, shadows on) renders into its own target, so it comes first.
-    mHarness->prepareShadows(method, frame, std::span(mForest),
-                             forestBounds(mForest, mTree.bounds));
+    mHarness->prepareShadows(method, frame, std::span(mForest), mForestBounds);
     mHarness->beginFrame(target);
     if (mWireframe) g.PolygonMode(GL_FRONT_AND_BACK, GL_LINE);
     if (countPrimitives) g.BeginQuery(GL_PRIMITIVES_GENERATED, mPrimitivesQuery);
@@ -547,6 +546,7 @@ class Viewer {
   double mBakeSeconds = 0.0;
 
   std::vector<Instance> mForest;
+  Aabb mForestBounds;  // of the forest, for the shadow map; updated with the layout
   int mForestSize = 1;
   uint32_t mForestSeed = 1;
   gl::Buffer mInstanceBuffer;

@@ -196,6 +196,15 @@ RenderTarget Device::createRenderTarget(int width, int height, GLenum colorForma
   return target;
 }
 
+VertexArray createVertexArray() {
+  const Api& g = api();
+  GLuint id = 0;
+  g.GenVertexArrays(1, &id);
+  VertexArray vao{GlName<deleteVertexArrayName>(id)};
+  g.BindVertexArray(id);
+  return vao;
+}
+
 ShadowMap Device::createShadowMap(int size) {
   const Api& g = api();
   ShadowMap map;

@@ -97,6 +97,10 @@ struct VertexArray {
   GLuint id() const { return name.id(); }
 };
 
+// A new vertex array, bound so its attribute setup can follow (attribute-less draws need one
+// bound too in a core context). Vertex arrays hold no memory of their own, so no ledger entry.
+VertexArray createVertexArray();
+
 // An offscreen colour + depth target; colour is a texture so it can be read back or sampled.
 struct RenderTarget {
   GlName<deleteFramebufferName> framebuffer;

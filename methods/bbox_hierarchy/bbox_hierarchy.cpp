@@ -286,8 +286,7 @@ class BboxHierarchy final : public Method {
           leafRanges[n].second);
     }
     g.BindVertexArray(0);
-    if (mParams.drawWood)
-      mWood.draw(frame, frame.instanceBuffer, 0, static_cast<GLsizei>(instances.size()));
+    if (mParams.drawWood) mWood.draw(frame, instances.size());
   }
 
   uint64_t lodSignature() const override { return mSignature; }

@@ -122,8 +122,7 @@ class BillboardCloudMethod final : public Method {
     g.BindVertexArray(mVao.id());
     mLevels.draw(mLod, {});
     g.BindVertexArray(0);
-    if (mParams.drawWood)
-      mWood.draw(frame, frame.instanceBuffer, 0, static_cast<GLsizei>(instances.size()));
+    if (mParams.drawWood) mWood.draw(frame, instances.size());
   }
 
   uint64_t lodSignature() const override { return mLod.signature(); }

@@ -11,10 +11,7 @@ namespace canopy {
 
 gl::VertexArray makeMeshVertexArray(const gl::Buffer& vertices, const gl::Buffer& indices) {
   const gl::Api& g = gl::api();
-  GLuint id = 0;
-  g.GenVertexArrays(1, &id);
-  gl::VertexArray vao{gl::GlName<gl::deleteVertexArrayName>(id)};
-  g.BindVertexArray(id);
+  gl::VertexArray vao = gl::createVertexArray();
   g.BindBuffer(GL_ARRAY_BUFFER, vertices.id());
   g.EnableVertexAttribArray(0);
   g.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(MeshVertex),
@@ -86,8 +83,8 @@ void WoodRenderer::upload(gl::Device& device, bool mipmaps) {
                                    gl::embeddedShader("methods/common/wood.frag")});
 }
 
-void WoodRenderer::draw(const FrameContext& frame, GLuint instanceBuffer, GLint firstInstance,
-                        GLsizei count) const {
+void WoodRenderer::draw(const FrameContext& frame, size_t instances) const {
+  const auto count = static_cast<GLsizei>(instances);
   if (count == 0 || mRanges.empty()) return;
   const gl::Api& g = gl::api();
   mProgram.use();
@@ -95,7 +92,7 @@ void WoodRenderer::draw(const FrameContext& frame, GLuint instanceBuffer, GLint 
   mProgram.set("uWoodTexture", 0);
   g.ActiveTexture(GL_TEXTURE0);
   g.BindVertexArray(mVao.id());
-  bindInstanceMatrices(instanceBuffer, 4, firstInstance);
+  bindInstanceMatrices(frame.instanceBuffer, 4);
   for (const Range& range : mRanges) {
     const WoodMaterial& material = mMaterials[range.material];
     mProgram.set("uBaseColor",

@@ -31,9 +31,9 @@ class WoodRenderer {
  public:
   void bake(const Tree& tree);
   void upload(gl::Device& device, bool mipmaps);
-  // Draws `count` instances from `firstInstance` of a buffer of instance matrices.
-  void draw(const FrameContext& frame, GLuint instanceBuffer, GLint firstInstance,
-            GLsizei count) const;
+  // Draws the frame's `instances` instances (frame.instanceBuffer: every method draws the
+  // trunk of every tree).
+  void draw(const FrameContext& frame, size_t instances) const;
   void save(AssetFolder& asset) const;  // blobs and images prefixed "wood_", header key "wood"
   void load(AssetFolder& asset);
   size_t triangleCount() const { return mIndices.size() / 3; }

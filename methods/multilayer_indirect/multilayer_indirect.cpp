@@ -287,8 +287,7 @@ class MultilayerIndirect final : public Method {
     });
     g.ActiveTexture(GL_TEXTURE0);
     g.BindVertexArray(0);
-    if (mParams.drawWood)
-      mWood.draw(frame, frame.instanceBuffer, 0, static_cast<GLsizei>(instances.size()));
+    if (mParams.drawWood) mWood.draw(frame, instances.size());
   }
 
   uint64_t lodSignature() const override { return mLod.signature(); }
@@ -471,10 +470,7 @@ class MultilayerIndirect final : public Method {
 
   void makeVertexArray() {
     const gl::Api& g = gl::api();
-    GLuint vao = 0;
-    g.GenVertexArrays(1, &vao);
-    mVao = gl::VertexArray{gl::GlName<gl::deleteVertexArrayName>(vao)};
-    g.BindVertexArray(vao);
+    mVao = gl::createVertexArray();
     g.BindBuffer(GL_ARRAY_BUFFER, mVbo.id());
     const auto attribute = [&](GLuint location, GLint components, size_t offset) {
       g.EnableVertexAttribArray(location);

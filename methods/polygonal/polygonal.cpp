@@ -104,7 +104,7 @@ class Polygonal final : public Method {
                               reinterpret_cast<const void*>(sizeof(uint32_t) * range.first), count);
     }
     g.BindVertexArray(0);
-    if (mParams.drawWood) mWood.draw(frame, frame.instanceBuffer, 0, count);
+    if (mParams.drawWood) mWood.draw(frame, instances.size());
   }
 
   nlohmann::json effectiveParams() const override { return writeParams(mParams); }

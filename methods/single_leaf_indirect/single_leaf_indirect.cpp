@@ -119,10 +119,7 @@ class SingleLeafIndirect final : public Method {
     mIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mIndices,
                                "billboard indices");
     const gl::Api& g = gl::api();
-    GLuint vao = 0;
-    g.GenVertexArrays(1, &vao);
-    mVao = gl::VertexArray{gl::GlName<gl::deleteVertexArrayName>(vao)};
-    g.BindVertexArray(vao);
+    mVao = gl::createVertexArray();
     g.BindBuffer(GL_ARRAY_BUFFER, mVbo.id());
     g.EnableVertexAttribArray(0);
     g.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
@@ -168,8 +165,7 @@ class SingleLeafIndirect final : public Method {
     g.BindVertexArray(mVao.id());
     mLevels.draw(mLod, {});
     g.BindVertexArray(0);
-    if (mParams.drawWood)
-      mWood.draw(frame, frame.instanceBuffer, 0, static_cast<GLsizei>(instances.size()));
+    if (mParams.drawWood) mWood.draw(frame, instances.size());
   }
 
   uint64_t lodSignature() const override { return mLod.signature(); }

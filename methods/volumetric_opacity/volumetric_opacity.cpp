@@ -190,9 +190,8 @@ class VolumetricOpacity final : public Method {
     mProgram =
         device.createProgram({gl::embeddedShader("methods/volumetric_opacity/billboards.vert"),
                               gl::embeddedShader("methods/volumetric_opacity/billboards.frag")});
-    GLuint vao = 0;  // attribute-less draws still need a vertex array bound in a core context
-    gl::api().GenVertexArrays(1, &vao);
-    mVao = gl::VertexArray{gl::GlName<gl::deleteVertexArrayName>(vao)};
+    mVao = gl::createVertexArray();  // attribute-less draws still need one in a core context
+    gl::api().BindVertexArray(0);
   }
 
   void draw(const FrameContext& frame, std::span<const Instance> instances) override {
