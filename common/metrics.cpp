@@ -6,6 +6,8 @@
 #include <limits>
 #include <vector>
 
+#include "common/flip.h"
+
 namespace canopy {
 
 double psnrFromMse(double mse) {
@@ -100,10 +102,28 @@ double ssimLuma(const ImageRgba8& a, const ImageRgba8& b, int x0, int y0, int x1
   return sum / double(count);
 }
 
-ImageMetrics compareImages(const ImageRgba8& reference, const ImageRgba8& image) {
+namespace {
+ImageMetrics compareWithoutFlip(const ImageRgba8& reference, const ImageRgba8& image);
+}  // namespace
+
+ImageMetrics compareImages(const ImageRgba8& reference, const ImageRgba8& image,
+                           double flipPixelsPerDegree) {
+  ImageMetrics metrics = compareWithoutFlip(reference, image);
+  if (flipPixelsPerDegree > 0.0) metrics.flip = flipMean(reference, image, flipPixelsPerDegree);
+  return metrics;
+}
+
+ImageMetrics compareImages(const FlipReference& reference, const ImageRgba8& image) {
+  ImageMetrics metrics = compareWithoutFlip(reference.image(), image);
+  metrics.flip = reference.meanError(image);
+  return metrics;
+}
+
+namespace {
+ImageMetrics compareWithoutFlip(const ImageRgba8& reference, const ImageRgba8& image) {
   assert(reference.width == image.width && reference.height == image.height);
   ImageMetrics metrics;
-  double sumUnion = 0.0, sumFrame = 0.0, coverage = 0.0;
+  double sumUnion = 0.0, sumFrame = 0.0, coverage = 0.0, coverageFrame = 0.0;
   int x0 = reference.width, y0 = reference.height, x1 = 0, y1 = 0;
   for (int y = 0; y < reference.height; ++y) {
     for (int x = 0; x < reference.width; ++x) {
@@ -112,9 +132,11 @@ ImageMetrics compareImages(const ImageRgba8& reference, const ImageRgba8& image)
       double squared = 0.0;
       for (int c = 0; c < 3; ++c) squared += std::pow(double(r[c]) - double(m[c]), 2);
       sumFrame += squared;
+      const double alphaError = std::abs(int(r[3]) - int(m[3])) / 255.0;
+      coverageFrame += alphaError;
       if (r[3] > 0 || m[3] > 0) {
         sumUnion += squared;
-        coverage += std::abs(int(r[3]) - int(m[3])) / 255.0;
+        coverage += alphaError;
         ++metrics.unionPixels;
         x0 = std::min(x0, x);
         y0 = std::min(y0, y);
@@ -125,6 +147,7 @@ ImageMetrics compareImages(const ImageRgba8& reference, const ImageRgba8& image)
   }
   const double frameSamples = 3.0 * reference.width * reference.height;
   metrics.psnrFrame = psnrFromMse(sumFrame / frameSamples);
+  metrics.coverageErrorFrame = coverageFrame / double(reference.width * reference.height);
   if (metrics.unionPixels == 0) {
     // Nothing drawn in either image: the images agree exactly.
     metrics.psnr = kPsnrCapDb;
@@ -136,5 +159,6 @@ ImageMetrics compareImages(const ImageRgba8& reference, const ImageRgba8& image)
   metrics.ssim = ssimLuma(reference, image, x0, y0, x1, y1);
   return metrics;
 }
+}  // namespace
 
 }  // namespace canopy

@@ -1,5 +1,8 @@
 #pragma once
 
+#include <cmath>
+
+#include "common/flip.h"
 #include "common/image.h"
 
 namespace canopy {
@@ -14,10 +17,16 @@ struct ImageMetrics {
   double psnrFrame = 0.0;      // dB, MSE over RGB of the whole frame
   double ssim = 0.0;           // mean SSIM of luma over the bounding box of the union mask
   double coverageError = 0.0;  // mean |alpha_ref − alpha| / 255 over the union mask
-  long unionPixels = 0;        // pixels in the union mask
+  double coverageErrorFrame = 0.0;  // mean |alpha_ref − alpha| / 255 over the whole frame
+  double flip = std::nan("");       // LDR-FLIP, mean over the frame (NaN when not asked for)
+  long unionPixels = 0;             // pixels in the union mask
 };
 
-ImageMetrics compareImages(const ImageRgba8& reference, const ImageRgba8& image);
+// `flipPixelsPerDegree` > 0 also computes FLIP at that viewing condition (common/flip.h).
+ImageMetrics compareImages(const ImageRgba8& reference, const ImageRgba8& image,
+                           double flipPixelsPerDegree = 0.0);
+// The same against a reference prepared once for FLIP (its image is the reference).
+ImageMetrics compareImages(const FlipReference& reference, const ImageRgba8& image);
 
 // 10·log10(255² / mse), capped at kPsnrCapDb.
 double psnrFromMse(double mse);
