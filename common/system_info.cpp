@@ -54,13 +54,39 @@ std::string runCommand(const std::string& command) {
 }
 }  // namespace
 
+namespace {
+// What decides the numbers a run prints: the code and its build. Results, figures and docs may
+// change without making a run of the same config stale.
+constexpr const char* kCodePaths =
+    "common methods bench viewer cmake CMakeLists.txt CMakePresets.json";
+
+std::string gitIn(const std::string& arguments) {
+  return runCommand("git -C '" + std::string(CANOPY_SOURCE_DIR) + "' " + arguments +
+                    " 2>/dev/null");
+}
+}  // namespace
+
 std::string gitCommit() {
-  const std::string dir = CANOPY_SOURCE_DIR;
-  const std::string commit = runCommand("git -C '" + dir + "' rev-parse HEAD 2>/dev/null");
+  const std::string commit = gitIn("rev-parse HEAD");
   if (commit.empty()) return "unknown";
   const std::string dirty =
-      runCommand("git -C '" + dir + "' status --porcelain --untracked-files=no 2>/dev/null");
+      gitIn(std::string("status --porcelain --untracked-files=no -- ") + kCodePaths);
   return dirty.empty() ? commit : commit + "+dirty";
+}
+
+std::string codeVersion() {
+  const std::string commit = gitCommit();
+  if (commit == "unknown" || !commit.ends_with("+dirty")) return commit;
+  // The uncommitted change itself, hashed (FNV-1a 64), so two different edits are two versions.
+  const std::string diff = gitIn(std::string("diff HEAD -- ") + kCodePaths);
+  uint64_t hash = 14695981039346656037ULL;
+  for (unsigned char c : diff) {
+    hash ^= c;
+    hash *= 1099511628211ULL;
+  }
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(hash));
+  return commit + "." + hex;
 }
 
 std::string isoTimestampUtc() {
