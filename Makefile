@@ -6,6 +6,8 @@ CONFIG ?= configs/default.json
 JOBS ?= $(shell nproc)
 # Debian's interpreter, which has python3-matplotlib (a python3 earlier on PATH may not).
 PYTHON ?= /usr/bin/python3
+# The run folder of CONFIG: results/<its "name">, read when a target needs it.
+RUN = $(shell $(PYTHON) -c "import json; print(json.load(open('$(CONFIG)'))['name'])")
 
 .PHONY: deps configure build test bench figures format clean
 
@@ -21,8 +23,12 @@ build: configure
 test: build
 	@ctest --preset $(PRESET)
 
+# Resumes an interrupted run of the same config and code; otherwise (a fresh clone's committed
+# results, or a finished run) moves the old run aside and measures anew. Then its figures.
 bench: build
-	@$(BIN)/canopy-bench --config $(CONFIG)
+	@$(BIN)/canopy-bench --config $(CONFIG) --resume-or-fresh
+	@$(PYTHON) paper_figures/make_figures.py results/$(RUN)
+	@echo "canopy: results in results/$(RUN)/ (summary.md), figures in paper_figures/$(RUN)/"
 
 figures: deps
 	@$(PYTHON) paper_figures/make_figures.py results

@@ -104,6 +104,17 @@ glm::vec3 readVec3(ConfigObject& config, const std::string& key, glm::vec3 fallb
   return {values[0], values[1], values[2]};
 }
 
+CloseupSettings parseCloseups(ConfigObject& config) {
+  CloseupSettings closeups;
+  closeups.enabled = true;
+  closeups.distance = readNumber<float>(config, "distance", closeups.distance, 1.01f, 10000.0f);
+  closeups.fovYDegrees = readNumber<float>(config, "fov_deg", closeups.fovYDegrees, 0.5f, 170.0f);
+  closeups.azimuths = readNumber<int>(config, "azimuths", closeups.azimuths, 1, 360);
+  closeups.elevations = readList<float>(config, "elevations", closeups.elevations, -90.0f, 90.0f);
+  config.finish("views.closeups");
+  return closeups;
+}
+
 ViewSettings parseViews(ConfigObject& config) {
   ViewSettings views;
   RenderSettings& render = views.render;
@@ -128,9 +139,16 @@ ViewSettings parseViews(ConfigObject& config) {
     throwInputError("config {}: shadows need \"shading\": \"lit\"", config.keyPath("shadows"));
   render.shadowMapSize =
       readNumber<int>(config, "shadow_map_size", render.shadowMapSize, 64, 16384);
+  render.ambientOcclusion = config.get<bool>("ambient_occlusion", render.ambientOcclusion);
+  render.flipPixelsPerDegree =
+      readNumber<double>(config, "flip_ppd", render.flipPixelsPerDegree, 1.0, 1000.0);
   views.distances = readList<float>(config, "distances", views.distances, 1.01f, 10000.0f);
   views.elevations = readList<float>(config, "elevations", views.elevations, -90.0f, 90.0f);
   views.azimuths = readNumber<int>(config, "azimuths", views.azimuths, 1, 360);
+  if (config.has("closeups")) {
+    ConfigObject closeups = config.child("closeups");
+    views.closeups = parseCloseups(closeups);
+  }
   config.finish("views");
   return views;
 }
@@ -170,17 +188,25 @@ std::vector<Camera> readCameraPath(const std::string& path) {
 ForestSettings parseForests(ConfigObject& config, const RenderSettings& render,
                             const std::string& baseDirectory) {
   ForestSettings forests;
-  forests.width = render.width;
-  forests.height = render.height;
+  ForestTiming& timing = forests.timing;
+  timing.width = render.width;
+  timing.height = render.height;
   forests.sizes = readList<int>(config, "sizes", forests.sizes, 1, 1'000'000);
-  forests.frames = readNumber<int>(config, "frames", forests.frames, 1, 100'000);
-  forests.warmup = readNumber<int>(config, "warmup", forests.warmup, 0, 100'000);
-  readResolution(config, forests.width, forests.height);
+  timing.frames = readNumber<int>(config, "frames", timing.frames, 1, 100'000);
+  timing.warmup = readNumber<int>(config, "warmup", timing.warmup, 0, 100'000);
+  // Without "blocks", as many as the frames allow up to the default.
+  timing.blocks =
+      readNumber<int>(config, "blocks", std::min(timing.blocks, timing.frames), 1, 10'000);
+  if (timing.blocks > timing.frames) {
+    throwInputError("config {}: {} blocks need at least as many frames ({})",
+                    config.keyPath("blocks"), timing.blocks, timing.frames);
+  }
+  readResolution(config, timing.width, timing.height);
   if (config.has("camera_path")) {
     std::filesystem::path path = config.get<std::string>("camera_path");
     if (path.is_relative() && !std::filesystem::exists(path) && !baseDirectory.empty())
       path = std::filesystem::path(baseDirectory) / path;
-    forests.cameraPath = readCameraPath(path.string());
+    timing.path = readCameraPath(path.string());
   }
   config.finish("forests");
   return forests;
@@ -276,8 +302,8 @@ ExperimentConfig parseExperimentConfig(const nlohmann::json& json,
     ConfigObject forests = config.child("forests");
     experiment.forests = parseForests(forests, experiment.views.render, baseDirectory);
   } else {
-    experiment.forests.width = experiment.views.render.width;
-    experiment.forests.height = experiment.views.render.height;
+    experiment.forests.timing.width = experiment.views.render.width;
+    experiment.forests.timing.height = experiment.views.render.height;
   }
   if (config.has("popping")) {
     ConfigObject popping = config.child("popping");

@@ -21,20 +21,30 @@ struct MethodVariant {
   std::string label;  // "polygonal", "billboard_cloud[clusters=200,density=64]"
 };
 
+// "views.closeups": a ring seen through a narrow field of view from outside the crown, so that a
+// leaf spans tens of pixels (the scale of the multi-layer paper's Fig. 13). Scored like every
+// view; its records say "ring": "closeup".
+struct CloseupSettings {
+  bool enabled = false;
+  float distance = 1.5f;     // bounding-sphere radii from the centre
+  float fovYDegrees = 8.0f;  // vertical field of view
+  int azimuths = 4;
+  std::vector<float> elevations{0.0f, 30.0f};
+};
+
 struct ViewSettings {
   RenderSettings render;
   std::vector<float> distances{1.5f, 4.0f, 12.0f};  // bounding-sphere radii
   std::vector<float> elevations{0.0f, 30.0f, 60.0f, 90.0f};
   int azimuths = 8;
+  CloseupSettings closeups;
 };
 
 struct ForestSettings {
   std::vector<int> sizes{1, 10, 100};
-  int frames = 60;
-  int warmup = 10;
-  int width = 512;
-  int height = 512;
-  std::vector<Camera> cameraPath;  // "camera_path": a recorded path replayed instead of the orbit
+  // frames, warmup, blocks, resolution and "camera_path" (a path recorded in canopy-view,
+  // replayed instead of the orbit).
+  ForestTiming timing;
 };
 
 struct ExperimentConfig {

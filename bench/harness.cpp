@@ -15,6 +15,18 @@ namespace canopy {
 Harness::Harness(gl::Device& device, RenderSettings settings)
     : mDevice(device), mSettings(settings) {}
 
+Harness::~Harness() = default;
+
+void Harness::setTree(const Aabb& bounds, size_t leaves) {
+  mTreeBounds = bounds;
+  mTreeLeaves = leaves;
+}
+
+gl::DrawStatistics& Harness::statistics() {
+  if (!mStatistics) mStatistics = std::make_unique<gl::DrawStatistics>();
+  return *mStatistics;
+}
+
 gl::RenderTarget& Harness::targetOfSize(int width, int height) {
   for (gl::RenderTarget& target : mTargets) {
     if (target.width == width && target.height == height) return target;
@@ -42,16 +54,20 @@ void Harness::uploadInstances(const std::vector<Instance>& instances) {
   mUploadedInstances = instances;
 }
 
-FrameContext Harness::makeFrame(const Camera& camera, int width, int height,
+FrameContext Harness::makeFrame(const Camera& camera, glm::ivec2 outputSize, int supersample,
                                 GLuint instances) const {
   FrameContext frame;
   frame.view = camera.view();
-  frame.projection = camera.projection(float(width) / float(height));
+  frame.projection = camera.projection(float(outputSize.x) / float(outputSize.y));
   frame.cameraPosition = camera.position;
-  frame.viewportSize = {width, height};
+  frame.targetSize = outputSize * supersample;
+  frame.lodFocalPixels =
+      0.5f * float(outputSize.y) / std::tan(0.5f * glm::radians(camera.fovYDegrees));
+  frame.targetPixelsPerOutputPixel = float(supersample);
   frame.shading = mSettings.shading;
   frame.lightDirection = glm::normalize(mSettings.lightDirection);
   frame.ambient = mSettings.ambient;
+  frame.ambientOcclusion = mSettings.ambientOcclusion;
   frame.instanceBuffer = instances;
   return frame;
 }
@@ -65,6 +81,11 @@ void resetDrawState(const gl::Api& g) {
   g.Disable(GL_BLEND);
   g.Disable(GL_CULL_FACE);
 }
+
+double millisecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
 }  // namespace
 
 void Harness::beginFrame(const gl::RenderTarget& target) {
@@ -76,10 +97,6 @@ void Harness::beginFrame(const gl::RenderTarget& target) {
   const float transparent[4] = {0.0f, 0.0f, 0.0f, 0.0f};
   g.ClearBufferfv(GL_COLOR, 0, transparent);
   g.Clear(GL_DEPTH_BUFFER_BIT);
-}
-
-ImageRgbaF Harness::renderLinear(Method& method, const Camera& camera) {
-  return renderLinearAt(method, camera, mSettings.width, mSettings.height);
 }
 
 Aabb forestBounds(const std::vector<Instance>& forest, const Aabb& tree) {
@@ -112,11 +129,13 @@ void Harness::prepareShadows(Method& method, FrameContext& frame,
   const glm::vec3 light = glm::normalize(mSettings.lightDirection), center = scene.center();
   const float radius = std::max(0.5f * glm::length(scene.extent()), 1e-4f);
   const glm::vec3 up = std::abs(light.y) > 0.99f ? glm::vec3(0, 0, 1) : glm::vec3(0, 1, 0);
+  // The viewer's LoD inputs (position, output focal length) stay: shadows follow what is seen.
   FrameContext shadow = frame;
   shadow.view = glm::lookAt(center + light * (2.0f * radius), center, up);
   shadow.projection = glm::ortho(-radius, radius, -radius, radius, 0.5f * radius, 3.5f * radius);
-  shadow.viewportSize = {mShadowMap.size, mShadowMap.size};
-  shadow.shading = Shading::kUnlit;  // depth only; LoD still follows frame.cameraPosition
+  shadow.targetSize = {mShadowMap.size, mShadowMap.size};
+  shadow.targetPixelsPerOutputPixel = 1.0f;  // shader LoD measures the map's own texels
+  shadow.shading = Shading::kUnlit;
   shadow.shadowMap = 0;
   g.BindFramebuffer(GL_FRAMEBUFFER, mShadowMap.framebuffer.id());
   g.Viewport(0, 0, mShadowMap.size, mShadowMap.size);
@@ -134,24 +153,44 @@ void Harness::prepareShadows(Method& method, FrameContext& frame,
   gl::selectLitVariant(true);  // the lit draw that follows samples the map
 }
 
-ImageRgbaF Harness::renderLinearAt(Method& method, const Camera& camera, int width, int height) {
-  const int s = mSettings.supersample;
-  gl::RenderTarget& target = targetOfSize(width * s, height * s);
-  uploadInstances({Instance{}});
-  FrameContext frame = makeFrame(camera, target.width, target.height, mInstances.id());
-  prepareShadows(method, frame, std::span(mUploadedInstances), mTreeBounds);
+void Harness::drawFrame(Method& method, const gl::RenderTarget& target, FrameContext frame,
+                        const Aabb& scene, DrawnStats* drawn) {
+  if (drawn) statistics().begin();
+  prepareShadows(method, frame, std::span(mUploadedInstances), scene);
   beginFrame(target);
   method.draw(frame, std::span(mUploadedInstances));
+  if (drawn) {
+    drawn->counts = mStatistics->end();
+    const double leaves = double(mTreeLeaves) * double(mUploadedInstances.size());
+    drawn->leafGeometryFraction = leaves > 0 ? double(method.leafPolygonsDrawn()) / leaves : 0.0;
+  }
+}
+
+ImageRgbaF Harness::readTarget(const gl::RenderTarget& target) const {
   const gl::Api& g = gl::api();
-  ImageRgbaF full(target.width, target.height);
+  ImageRgbaF image(target.width, target.height);
   g.BindFramebuffer(GL_FRAMEBUFFER, target.framebuffer.id());
   g.ReadBuffer(GL_COLOR_ATTACHMENT0);
   g.PixelStorei(GL_PACK_ALIGNMENT, 4);
-  g.ReadPixels(0, 0, target.width, target.height, GL_RGBA, GL_FLOAT, full.pixels.data());
+  g.ReadPixels(0, 0, target.width, target.height, GL_RGBA, GL_FLOAT, image.pixels.data());
   g.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  flipRows(image);
+  return image;
+}
+
+ImageRgbaF Harness::renderLinear(Method& method, const Camera& camera) {
+  return renderLinearAt(method, camera, mSettings.width, mSettings.height);
+}
+
+ImageRgbaF Harness::renderLinearAt(Method& method, const Camera& camera, int width, int height,
+                                   DrawnStats* drawn) {
+  const int s = mSettings.supersample;
+  gl::RenderTarget& target = targetOfSize(width * s, height * s);
+  uploadInstances({Instance{}});
+  drawFrame(method, target, makeFrame(camera, {width, height}, s, mInstances.id()), mTreeBounds,
+            drawn);
   gl::checkError("Harness::renderLinear");
-  flipRows(full);
-  return boxDownsample(full, s);
+  return boxDownsample(readTarget(target), s);
 }
 
 ImageRgba8 Harness::display(const ImageRgbaF& linear) const {
@@ -179,52 +218,115 @@ FrameTimes summarizeFrameTimes(std::vector<double> milliseconds) {
   return times;
 }
 
-FrameTimes Harness::timeForest(Method& method, const std::vector<Instance>& forest,
-                               const Aabb& treeBounds, int frames, int warmup, int width,
-                               int height, const std::vector<Camera>& path) {
+double quantile(std::vector<double> values, double q) {
+  if (values.empty()) return std::nan("");
+  std::sort(values.begin(), values.end());
+  const double position = std::clamp(q, 0.0, 1.0) * double(values.size() - 1);
+  const size_t below = static_cast<size_t>(std::floor(position));
+  const size_t above = std::min(below + 1, values.size() - 1);
+  return values[below] + (position - double(below)) * (values[above] - values[below]);
+}
+
+Camera forestPathCamera(const ForestTiming& timing, const std::vector<Instance>& forest,
+                        const Aabb& treeBounds, int frame, float fovYDegrees) {
+  if (!timing.path.empty()) return timing.path[size_t(frame) % timing.path.size()];
+  return forestCamera(forest, treeBounds, frame, timing.frames, fovYDegrees);
+}
+
+double Harness::timeFrame(Method& method, const gl::RenderTarget& target, const Camera& camera,
+                          int width, int height, const Aabb& scene) {
+  const auto start = std::chrono::steady_clock::now();
+  drawFrame(method, target, makeFrame(camera, {width, height}, 1, mInstances.id()), scene, nullptr);
+  gl::api().Finish();
+  return millisecondsSince(start);
+}
+
+InterleavedTimes Harness::timeInterleaved(Method& reference, Method& method,
+                                          const std::vector<Instance>& forest,
+                                          const Aabb& treeBounds, const ForestTiming& timing,
+                                          ReferenceFrames* cache) {
+  const int width = timing.width, height = timing.height;
   gl::RenderTarget& target = targetOfSize(width, height);
   uploadInstances(forest);
-  const gl::Api& g = gl::api();
   const Aabb scene = forestBounds(forest, treeBounds);
-  std::vector<double> times;
-  g.Finish();
-  for (int i = 0; i < warmup + frames; ++i) {
-    const int pathFrame = i < warmup ? i : i - warmup;
-    const Camera camera =
-        path.empty() ? forestCamera(forest, treeBounds, pathFrame, frames, mSettings.fovYDegrees)
-                     : path[size_t(i) % path.size()];
-    const auto start = std::chrono::steady_clock::now();
-    FrameContext frameContext = makeFrame(camera, width, height, mInstances.id());
-    prepareShadows(method, frameContext, std::span(mUploadedInstances), scene);
-    beginFrame(target);
-    method.draw(frameContext, std::span(mUploadedInstances));
-    g.Finish();
-    const auto end = std::chrono::steady_clock::now();
-    if (i >= warmup)
-      times.push_back(std::chrono::duration<double, std::milli>(end - start).count());
+  const float fov = mSettings.fovYDegrees;
+  const auto camera = [&](int frame) {
+    return forestPathCamera(timing, forest, treeBounds, frame, fov);
+  };
+  gl::api().Finish();
+  for (int i = 0; i < timing.warmup; ++i) {
+    timeFrame(reference, target, camera(i), width, height, scene);
+    timeFrame(method, target, camera(i), width, height, scene);
   }
-  g.BindFramebuffer(GL_FRAMEBUFFER, 0);
-  gl::checkError("Harness::timeForest");
-  return summarizeFrameTimes(std::move(times));
+  InterleavedTimes result;
+  std::vector<double> referenceMs, methodMs;
+  const int blocks = std::clamp(timing.blocks, 1, std::max(timing.frames, 1));
+  ReferenceFrames local;
+  ReferenceFrames& frames = cache && cache->complete(blocks) ? *cache : local;
+  const bool renderReference = !(cache && cache->complete(blocks));
+  for (int block = 0; block < blocks; ++block) {
+    const int first = block * timing.frames / blocks, last = (block + 1) * timing.frames / blocks;
+    std::vector<double> blockMs[2];  // [0] reference, [1] method
+    for (int turn = 0; turn < 2; ++turn) {
+      const int which = (block % 2 == 0) ? turn : 1 - turn;  // ABBA...
+      Method& timed = which == 0 ? reference : method;
+      for (int i = first; i < last; ++i)
+        blockMs[which].push_back(timeFrame(timed, target, camera(i), width, height, scene));
+    }
+    referenceMs.insert(referenceMs.end(), blockMs[0].begin(), blockMs[0].end());
+    methodMs.insert(methodMs.end(), blockMs[1].begin(), blockMs[1].end());
+    const double methodMedian = summarizeFrameTimes(blockMs[1]).medianMs;
+    result.blockRatios.push_back(summarizeFrameTimes(blockMs[0]).medianMs /
+                                 std::max(methodMedian, 1e-9));
+    // The block's scored frame: its first camera, untimed, read back from each (the
+    // reference's from the cache once it holds them).
+    if (renderReference) {
+      DrawnStats drawn;
+      frames.images.emplace_back(
+          renderForestFrame(reference, forest, treeBounds, camera(first), width, height, &drawn),
+          mSettings.flipPixelsPerDegree);
+      frames.drawn.push_back(drawn);
+    }
+    const FlipReference& scored = frames.images[size_t(block)];
+    const ImageRgba8& expected = scored.image();
+    const DrawnStats& referenceDrawn = frames.drawn[size_t(block)];
+    DrawnStats methodDrawn;
+    const ImageRgba8 image =
+        renderForestFrame(method, forest, treeBounds, camera(first), width, height, &methodDrawn);
+    const ImageMetrics metrics = compareImages(scored, image);
+    result.psnr += metrics.psnrFrame / blocks;
+    result.flip += metrics.flip / blocks;
+    result.coverageError += metrics.coverageErrorFrame / blocks;
+    long covered = 0;
+    for (size_t p = 3; p < expected.pixels.size(); p += 4) covered += expected.pixels[p] > 0;
+    result.referenceCoverage += double(covered) / double(width * height) / blocks;
+    result.drawn.counts += methodDrawn.counts;
+    result.drawn.leafGeometryFraction += methodDrawn.leafGeometryFraction / blocks;
+    result.referenceDrawn.counts += referenceDrawn.counts;
+    result.referenceDrawn.leafGeometryFraction += referenceDrawn.leafGeometryFraction / blocks;
+  }
+  for (gl::DrawCounts* counts : {&result.drawn.counts, &result.referenceDrawn.counts}) {
+    counts->primitives /= uint64_t(blocks);  // sums over the blocks → means
+    counts->fragments /= uint64_t(blocks);
+  }
+  if (cache && renderReference) *cache = std::move(local);
+  gl::checkError("Harness::timeInterleaved");
+  result.reference = summarizeFrameTimes(referenceMs);
+  result.method = summarizeFrameTimes(methodMs);
+  result.speedupMedian = quantile(result.blockRatios, 0.5);
+  result.speedupQ25 = quantile(result.blockRatios, 0.25);
+  result.speedupQ75 = quantile(result.blockRatios, 0.75);
+  return result;
 }
 
 ImageRgba8 Harness::renderForestFrame(Method& method, const std::vector<Instance>& forest,
-                                      const Aabb& treeBounds, int frame, int frames, int width,
-                                      int height) {
+                                      const Aabb& treeBounds, const Camera& camera, int width,
+                                      int height, DrawnStats* drawn) {
   gl::RenderTarget& target = targetOfSize(width, height);
   uploadInstances(forest);
-  const Camera camera = forestCamera(forest, treeBounds, frame, frames, mSettings.fovYDegrees);
-  FrameContext frameContext = makeFrame(camera, width, height, mInstances.id());
-  prepareShadows(method, frameContext, std::span(mUploadedInstances),
-                 forestBounds(forest, treeBounds));
-  beginFrame(target);
-  method.draw(frameContext, std::span(mUploadedInstances));
-  ImageRgbaF image(width, height);
-  const gl::Api& g = gl::api();
-  g.ReadPixels(0, 0, width, height, GL_RGBA, GL_FLOAT, image.pixels.data());
-  g.BindFramebuffer(GL_FRAMEBUFFER, 0);
-  flipRows(image);
-  return display(image);
+  drawFrame(method, target, makeFrame(camera, {width, height}, 1, mInstances.id()),
+            forestBounds(forest, treeBounds), drawn);
+  return display(readTarget(target));
 }
 
 }  // namespace canopy

@@ -1,11 +1,15 @@
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include <glm/vec3.hpp>
 
+#include "common/flip.h"
 #include "common/gl/device.h"
+#include "common/gl/draw_statistics.h"
 #include "common/image.h"
+#include "common/metrics.h"
 #include "common/views.h"
 #include "methods/method.h"
 
@@ -21,8 +25,10 @@ struct RenderSettings {
   glm::vec3 background{0.5f, 0.6f, 0.75f};     // sRGB, the colour images are composited over
   glm::vec3 lightDirection{0.3f, 0.8f, 0.5f};  // towards the light (normalised on use)
   float ambient = 0.35f;
+  bool ambientOcclusion = true;  // lit: AO scales the ambient term, for the reference too
   bool shadows = false;      // lit only: a shadow map rendered with the method itself each frame
   int shadowMapSize = 2048;  // texels per side
+  double flipPixelsPerDegree = kFlipDefaultPixelsPerDegree;  // FLIP's viewing condition
 };
 
 struct FrameTimes {
@@ -32,54 +38,106 @@ struct FrameTimes {
   int frames = 0;
 };
 
+// What one frame drew: GL query counts and the share of the tree's leaves drawn as polygons.
+struct DrawnStats {
+  gl::DrawCounts counts;  // primitives and fragments of the whole frame (and shadows)
+  double leafGeometryFraction =
+      0.0;  // leaf polygons drawn / (leaves × instances); 0 without leaves
+};
+
+// A forest timed along a camera path against the reference, and scored against it.
+struct ForestTiming {
+  int frames = 60;  // timed frames of each method
+  int warmup = 10;  // untimed frames of each before
+  int blocks = 5;   // the frames split into this many blocks, each timed reference/method in turn
+  int width = 512;
+  int height = 512;
+  std::vector<Camera> path;  // empty: the benchmark's orbit (forestCamera)
+};
+
+// Blocks of reference and method frames alternate on the same cameras (ABBA: each block's first
+// method alternates, so a drift in machine speed cancels), so every ratio compares frames timed
+// moments apart. One untimed frame per block (its first camera) is read back from each and scored.
+struct InterleavedTimes {
+  FrameTimes reference, method;     // over all timed frames
+  std::vector<double> blockRatios;  // per block: reference median ms / method median ms
+  double speedupMedian = 0.0;       // median of blockRatios
+  double speedupQ25 = 0.0, speedupQ75 = 0.0;
+  double psnr = 0.0;                 // mean over the blocks' scored frames: whole-frame PSNR,
+  double flip = 0.0;                 // FLIP,
+  double coverageError = 0.0;        // mean |Δα| over the frame
+  double referenceCoverage = 0.0;    // share of the frame the reference covers (α > 0)
+  DrawnStats drawn, referenceDrawn;  // means over the scored frames
+};
+
+// The reference's scored frames of one forest along one timing (one per block), kept across the
+// methods timed against it: they are the same for every method.
+struct ReferenceFrames {
+  std::vector<FlipReference> images;  // composited frames, prepared for FLIP
+  std::vector<DrawnStats> drawn;
+  bool complete(int blocks) const { return int(images.size()) == blocks; }
+};
+
 // Renders views and times forests for any method, through the same GL state and targets.
 class Harness {
  public:
   Harness(gl::Device& device, RenderSettings settings);
+  ~Harness();
 
   const RenderSettings& settings() const { return mSettings; }
   RenderSettings& settings() { return mSettings; }  // the viewer changes shading live
-  // The single tree's bounds (at the origin), which its shadow map must cover.
-  void setTreeBounds(const Aabb& bounds) { mTreeBounds = bounds; }
+  // The single tree (at the origin): its bounds, which its shadow map must cover, and its leaf
+  // count, the denominator of leaf_geometry_fraction.
+  void setTree(const Aabb& bounds, size_t leaves);
+  // The GL queries every counted frame uses; source() says which kind, for meta.json.
+  gl::DrawStatistics& statistics();
 
-  // The frame every draw gets, and the GL state every method starts from, bound to `target`:
-  // what renderLinear and timeForest use, for callers that draw into their own targets.
-  FrameContext makeFrame(const Camera& camera, int width, int height, GLuint instances) const;
+  // The frame every draw gets: matrices for a target of outputSize · supersample pixels, level of
+  // detail from the output size (FrameContext). For callers that draw into their own targets.
+  FrameContext makeFrame(const Camera& camera, glm::ivec2 outputSize, int supersample,
+                         GLuint instances) const;
+  // Binds `target` and sets the GL state every method starts from.
   void beginFrame(const gl::RenderTarget& target);
 
-  // One tree at the origin seen by `camera`: the supersampled render box-filtered to the
-  // evaluation resolution (linear, premultiplied; alpha is coverage).
-  ImageRgbaF renderLinear(Method& method, const Camera& camera);
-  // The same at another resolution (still supersampled by settings().supersample).
-  ImageRgbaF renderLinearAt(Method& method, const Camera& camera, int width, int height);
+  // One tree at the origin seen by `camera`: the render supersampled by settings().supersample,
+  // box-filtered to width × height (linear, premultiplied; alpha is coverage). `drawn`, when
+  // given, receives what the frame drew.
+  ImageRgbaF renderLinearAt(Method& method, const Camera& camera, int width, int height,
+                            DrawnStats* drawn = nullptr);
+  ImageRgbaF renderLinear(Method& method, const Camera& camera);  // at the evaluation resolution
   // A linear premultiplied image composited over the background, 8-bit sRGB (alpha keeps
   // coverage): how every scored image is made, rendered or captured.
   ImageRgba8 display(const ImageRgbaF& linear) const;
-  // The same composited over the background and encoded to 8-bit sRGB (alpha keeps coverage).
-  ImageRgba8 render(Method& method, const Camera& camera);
+  ImageRgba8 render(Method& method, const Camera& camera);  // display(renderLinear(...))
 
-  // Frame times of the forest seen along the benchmark's camera path, glFinish after each frame,
-  // after `warmup` unmeasured frames, at width × height without supersampling.
-  // A non-empty `path` replaces the orbit: frame i looks from path[i % path.size()].
-  FrameTimes timeForest(Method& method, const std::vector<Instance>& forest, const Aabb& treeBounds,
-                        int frames, int warmup, int width, int height,
-                        const std::vector<Camera>& path = {});
+  // Times `method` against `reference` on the same forest and cameras (InterleavedTimes), at
+  // timing.width × height without supersampling, glFinish after each frame. `cache`, when
+  // given, holds the reference's scored frames: filled on first use, reused after.
+  InterleavedTimes timeInterleaved(Method& reference, Method& method,
+                                   const std::vector<Instance>& forest, const Aabb& treeBounds,
+                                   const ForestTiming& timing, ReferenceFrames* cache = nullptr);
 
-  // A frame of a forest as an image (for checks and figures).
+  // Frame `frame` of the forest path as an image (no supersampling), with what it drew.
   ImageRgba8 renderForestFrame(Method& method, const std::vector<Instance>& forest,
-                               const Aabb& treeBounds, int frame, int frames, int width,
-                               int height);
+                               const Aabb& treeBounds, const Camera& camera, int width, int height,
+                               DrawnStats* drawn = nullptr);
 
   // Lit and shadowed frames (settings().shadows): renders the method's depth from the light over
-  // `scene` (LoD chosen from the viewer's position, so close trees shadow with full evaluation and
-  // far ones with their coarse levels) and fills the frame's shadow fields, binding the map for
-  // the draw that follows. Does nothing for unlit frames.
+  // `scene` (LoD chosen from the viewer, as frame says, so close trees shadow with full
+  // evaluation and far ones with their coarse levels) and fills the frame's shadow fields,
+  // binding the map for the draw that follows. Does nothing for unlit frames.
   void prepareShadows(Method& method, FrameContext& frame, std::span<const Instance> instances,
                       const Aabb& scene);
 
  private:
   gl::RenderTarget& targetOfSize(int width, int height);
   void uploadInstances(const std::vector<Instance>& instances);
+  // Shadows (if any), then the method's draw, into `target`; counted when `drawn` is given.
+  void drawFrame(Method& method, const gl::RenderTarget& target, FrameContext frame,
+                 const Aabb& scene, DrawnStats* drawn);
+  ImageRgbaF readTarget(const gl::RenderTarget& target) const;
+  double timeFrame(Method& method, const gl::RenderTarget& target, const Camera& camera, int width,
+                   int height, const Aabb& scene);
 
   gl::Device& mDevice;
   RenderSettings mSettings;
@@ -87,7 +145,9 @@ class Harness {
   gl::Buffer mInstances;
   std::vector<Instance> mUploadedInstances;
   Aabb mTreeBounds;
+  size_t mTreeLeaves = 0;
   gl::ShadowMap mShadowMap;
+  std::unique_ptr<gl::DrawStatistics> mStatistics;  // made on first use (needs the context)
 };
 
 // The bounds of every instance of a tree with bounds `tree`.
@@ -95,5 +155,12 @@ Aabb forestBounds(const std::vector<Instance>& forest, const Aabb& tree);
 
 // Median and 95th percentile (nearest rank) of frame times in milliseconds.
 FrameTimes summarizeFrameTimes(std::vector<double> milliseconds);
+
+// The q-quantile (0..1) of values by linear interpolation between order statistics.
+double quantile(std::vector<double> values, double q);
+
+// Frame i of a forest timing's camera path: the recorded path, or the orbit.
+Camera forestPathCamera(const ForestTiming& timing, const std::vector<Instance>& forest,
+                        const Aabb& treeBounds, int frame, float fovYDegrees);
 
 }  // namespace canopy

@@ -23,13 +23,17 @@ int main(int argc, char** argv) {
   using namespace canopy;
   CLI::App app{"canopy-bench: compare tree impostor methods against the polygonal reference"};
   std::string configPath, outDirectory, backend = "osmesa", shard = "0/1";
-  bool quiet = false, listMethods = false, noImages = false;
+  bool quiet = false, listMethods = false, noImages = false, fresh = false, resumeOrFresh = false;
   app.add_option("--config", configPath, "experiment config (JSON)");
   app.add_option("--out", outDirectory, "output folder (default: results/<config name>)");
   app.add_option("--gl", backend, "OpenGL backend: osmesa | egl | glfw");
   app.add_option("--shard", shard, "run slice I of N of the (tree × method) units, as I/N");
   app.add_flag("--quiet", quiet, "no progress bars and no info logs");
   app.add_flag("--no-images", noImages, "do not write rendered views as PNG");
+  app.add_flag("--fresh", fresh, "move an earlier run in the output folder aside and start anew");
+  app.add_flag(
+      "--resume-or-fresh", resumeOrFresh,
+      "resume an unfinished run of the same config and code, else start anew (make bench)");
   app.add_flag("--list-methods", listMethods, "print the registered methods and exit");
   // canopy-bench export-tree --preset broadleaf --seed 1 [--leaves N] --out DIR
   CLI::App* exportTree =
@@ -139,6 +143,11 @@ int main(int argc, char** argv) {
     options.outDirectory = outDirectory.empty() ? std::filesystem::path("results") / config.name
                                                 : std::filesystem::path(outDirectory);
     options.saveImages = !noImages;
+    if (fresh && resumeOrFresh) throwInputError("--fresh and --resume-or-fresh exclude each other");
+    options.resume = fresh           ? ResumePolicy::kFresh
+                     : resumeOrFresh ? ResumePolicy::kResumeOrFresh
+                                     : ResumePolicy::kResume;
+    options.printTable = !quiet;
     runExperiment(config, options);
     return kExitOk;
   });

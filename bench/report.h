@@ -15,8 +15,15 @@ struct SummaryRow {
   std::string variant;
   nlohmann::json params;  // effective
   nlohmann::json bake;    // the kind:"bake" record (null when absent)
-  double psnr = 0, psnrFrame = 0, ssim = 0, coverageError = 0;
+  // Means over the views of the orbit rings (or a capture's test views); the close-up ring has
+  // its own means below, as its narrow field of view makes it another measurement.
+  double psnr = 0, psnrFrame = 0, ssim = 0, coverageError = 0, flip = 0;
   int views = 0;
+  double psnrCloseup = 0, flipCloseup = 0, ssimCloseup = 0;  // NaN without a close-up ring
+  int closeupViews = 0;
+  // What the views drew (means over the orbit views): primitives, fragment-shader invocations
+  // per output pixel (÷ supersample² · width · height) and the share of leaves drawn as polygons.
+  double primitives = 0, fragmentsPerPixel = 0, leafGeometryFraction = 0;
   std::vector<std::pair<double, double>> psnrByDistance;   // (distance, mean PSNR)
   std::vector<std::pair<double, double>> psnrByElevation;  // (elevation, mean PSNR)
   std::vector<nlohmann::json> forests;                     // kind:"forest" records by size
@@ -31,6 +38,11 @@ std::vector<SummaryRow> summarize(const std::vector<nlohmann::json>& records);
 std::string formatPoppingCsv(const std::vector<SummaryRow>& rows);
 
 std::string formatSummaryCsv(const std::vector<SummaryRow>& rows);
+
+// The README's main table for the first tree of the rows: memory, bake, quality on the orbit
+// rings and the close-ups, what was drawn, and speed at the largest forest (median and IQR of
+// interleaved per-block ratios) with its forest-frame FLIP.
+std::string formatMainTable(const std::vector<SummaryRow>& rows, const std::string& renderer);
 std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std::string& title,
                                   const std::string& renderer);
 

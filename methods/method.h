@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -26,6 +27,8 @@ namespace canopy {
 
 class ProgressBar;
 
+enum class Shading { kUnlit, kLit };
+
 // What bake() may use besides the tree.
 struct BakeContext {
   uint64_t seed = 1;                // every random choice of a bake derives from it
@@ -34,26 +37,45 @@ struct BakeContext {
   // linear premultiplied RGBA, alpha the supersampled coverage. The harness sets it; image-based
   // methods take their "photographs" of a mesh tree with it.
   std::function<ImageRgbaF(const Camera& camera, int width, int height)> photograph;
+  // How the run will shade its frames: methods that bake lighting data (ambient occlusion) for
+  // lit frames only may skip it for unlit runs.
+  Shading shading = Shading::kUnlit;
+  bool ambientOcclusion = true;  // the run's views.ambient_occlusion: false turns AO off for all
 };
-
-enum class Shading { kUnlit, kLit };
 
 // Everything a draw needs to know about the frame. Instances are also in instanceBuffer (one
 // mat4 per instance, column-major, in span order) so methods bind them without uploading.
+//
+// Level of detail is chosen in output pixels: the evaluation image a view is scored at (or the
+// frame a forest is timed at), never the supersampled render target, so a view is scored at the
+// LoD it is timed at. Methods read lodFocalPixels / projectedPixels for every LoD decision and
+// never derive one from targetSize.
 struct FrameContext {
   glm::mat4 view{1.0f};
   glm::mat4 projection{1.0f};
-  glm::vec3 cameraPosition{0.0f};
-  glm::ivec2 viewportSize{0};
+  glm::vec3 cameraPosition{0.0f};  // the viewer (LoD and view directions follow it)
+  glm::ivec2 targetSize{0};        // the render target in pixels (supersampled): not for LoD
+  // Focal length of the output image in pixels: outputHeight / (2 tan(fovY / 2)). A world length
+  // s at distance d from the viewer spans s · lodFocalPixels / d output pixels.
+  float lodFocalPixels = 1.0f;
+  // Render-target pixels per output pixel along each axis (the supersampling factor). Shader LoD
+  // that measures screen derivatives divides them by it, so it too counts output pixels.
+  float targetPixelsPerOutputPixel = 1.0f;
   Shading shading = Shading::kUnlit;
   glm::vec3 lightDirection{0.3f, 0.8f, 0.5f};  // unit, towards the light (world space)
   float ambient = 0.35f;                       // ambient term of the lit shading
+  bool ambientOcclusion = true;                // lit: scale the ambient term by baked AO
   GLuint instanceBuffer = 0;
   int forcedLevel = -1;  // >= 0: every method with levels of detail draws this level
   // Lit frames with shadows: the light's depth (bound by the harness to texture unit
   // kShadowMapUnit, which methods leave alone) and the light's view-projection. 0: no shadows.
   GLuint shadowMap = 0;
   glm::mat4 lightViewProjection{1.0f};
+
+  // Output pixels spanned by a world length `size` seen from `distance` (the LoD measure).
+  float projectedPixels(float size, float distance) const {
+    return size * lodFocalPixels / std::max(distance, 1e-6f);
+  }
 };
 
 // The texture unit the shadow map is bound to during a lit, shadowed draw.
@@ -115,6 +137,11 @@ class Method {
   // Changes exactly when a draw picks different levels of detail than the draw before (0 for
   // methods without any): the popping metric marks those frames.
   virtual uint64_t lodSignature() const { return 0; }
+  // How many of the tree's own leaves the last draw() drew as leaf polygons, over all its
+  // instances (the harness divides by leaves × instances for "leaf_geometry_fraction"): every
+  // leaf for the reference, 0 for a pure impostor. Counted by the draw itself, so a method that
+  // wins by drawing the reference's geometry shows it.
+  virtual uint64_t leafPolygonsDrawn() const { return 0; }
   // The baked representation, so bake and render can run apart.
   virtual void save(AssetFolder& asset) const = 0;
   virtual void load(AssetFolder& asset) = 0;

@@ -3,7 +3,10 @@
 paper_figures/<name>/:
 
   fps_vs_trees.png      FPS vs forest size per method (log-log)
-  psnr_vs_distance.png  PSNR per distance ring
+  speedup_vs_trees.png  speedup vs polygonal per forest size, bars: interquartile range of blocks
+  psnr_vs_distance.png  PSNR per distance ring; the close-up ring as its own marker
+  psnr_vs_fragments.png PSNR against fragment-shader invocations per pixel of the views
+  speedup_vs_flip.png   forest speedup against the FLIP of the forest frames
   memory_vs_psnr.png    GPU memory vs PSNR with the Pareto front (less memory, more PSNR)
   bake_time.png         bake time per method variant
   comparison_grid.png   rows: views; columns: reference then each variant, each image above its
@@ -50,14 +53,18 @@ def safe_name(label):
     return re.sub(r"[^A-Za-z0-9_.=,-]", "_", label)
 
 
-def plot_per_tree(rows, trees, prefix, xlabel, ylabel, log_y, path):
-    """One panel per tree, one line per method variant, x from the column suffix (log scale)."""
+def plot_per_tree(rows, trees, prefix, xlabel, ylabel, log_y, path, extra=None):
+    """One panel per tree, one line per method variant, x from the column suffix (log scale).
+    `extra(axis, row, colour)` may add a variant's further marks in its line's colour."""
     fig, axes = plt.subplots(1, len(trees), figsize=(4.2 * len(trees), 3.6), squeeze=False)
     for axis, tree in zip(axes[0], trees):
         for row in (r for r in rows if r["tree"] == tree):
             points = series(row, prefix)
             if points:
-                axis.plot([p[0] for p in points], [p[1] for p in points], marker="o", label=row["variant"])
+                line, = axis.plot([p[0] for p in points], [p[1] for p in points], marker="o",
+                                  label=row["variant"])
+                if extra:
+                    extra(axis, row, line.get_color())
         axis.set_xscale("log")
         if log_y:
             axis.set_yscale("log")
@@ -124,28 +131,104 @@ def plot_bake_time(rows, path):
     plt.close(fig)
 
 
+def plot_scatter_per_tree(rows, trees, points_of, xlabel, ylabel, log_x, path):
+    """One panel per tree; points_of(row) gives (x, y, marker label) points of a variant."""
+    fig, axes = plt.subplots(1, len(trees), figsize=(4.6 * len(trees), 3.8), squeeze=False)
+    drawn = False
+    for axis, tree in zip(axes[0], trees):
+        for row in (r for r in rows if r["tree"] == tree):
+            points = [p for p in points_of(row) if p[0] is not None and p[1] is not None]
+            if not points:
+                continue
+            drawn = True
+            mark = axis.plot([p[0] for p in points], [p[1] for p in points], marker="o",
+                             linestyle="-" if len(points) > 1 else "none", label=row["variant"])[0]
+            for x, y, label in points:
+                if label:
+                    axis.annotate(label, (x, y), fontsize=5, xytext=(2, 2), textcoords="offset points",
+                                  color=mark.get_color())
+        if log_x:
+            axis.set_xscale("log")
+        axis.set_xlabel(xlabel)
+        axis.set_ylabel(ylabel)
+        axis.set_title(tree)
+        axis.grid(True, which="both", alpha=0.3)
+        axis.legend(fontsize=6)
+    fig.tight_layout()
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return drawn
+
+
+def forest_sizes(rows):
+    return sorted({int(m.group(1)) for r in rows for k in r
+                   if (m := re.fullmatch(r"speedup_vs_polygonal_n([0-9]+)", k))})
+
+
+def plot_speedup_vs_trees(rows, trees, path):
+    """Speedup per forest size with the interquartile range of the interleaved blocks."""
+    fig, axes = plt.subplots(1, len(trees), figsize=(4.2 * len(trees), 3.6), squeeze=False)
+    sizes = forest_sizes(rows)
+    for axis, tree in zip(axes[0], trees):
+        for row in (r for r in rows if r["tree"] == tree):
+            xs, ys, low, high = [], [], [], []
+            for n in sizes:
+                speedup = number(row.get(f"speedup_vs_polygonal_n{n}"))
+                q25, q75 = number(row.get(f"speedup_q25_n{n}")), number(row.get(f"speedup_q75_n{n}"))
+                if speedup is None:
+                    continue
+                xs.append(n)
+                ys.append(speedup)
+                low.append(speedup - q25 if q25 is not None else 0.0)
+                high.append(q75 - speedup if q75 is not None else 0.0)
+            if xs:
+                axis.errorbar(xs, ys, yerr=[low, high], marker="o", capsize=3, label=row["variant"])
+        axis.axhline(1.0, color="k", linewidth=0.8)
+        axis.set_xscale("log")
+        axis.set_yscale("log")
+        axis.set_xlabel("trees in the forest")
+        axis.set_ylabel("speedup vs polygonal (same run)")
+        axis.set_title(tree)
+        axis.grid(True, which="both", alpha=0.3)
+        axis.legend(fontsize=6)
+    fig.tight_layout()
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+
+
 def load_rgb(path):
     image = mpimg.imread(path)
     return image[..., :3].astype(np.float64)
 
 
 def pick_views(view_dir, count):
-    """Up to `count` view keys spread over the distance rings (nearest first)."""
+    """Up to `count` view keys: one per orbit distance ring (nearest first, elevation 30° where
+    there is one), then one of the close-up ring ("closeup_" keys) if the run has it."""
     keys = sorted(p.stem for p in view_dir.glob("*.png"))
+    closeup = [k for k in keys if k.startswith("closeup_")]
     def distance(key):
         match = re.match(r"d([0-9.]+)_", key)
         return float(match.group(1)) if match else 0.0
     by_distance = {}
     for key in keys:
-        by_distance.setdefault(distance(key), []).append(key)
+        if not key.startswith("closeup_"):
+            by_distance.setdefault(distance(key), []).append(key)
     chosen = []
     for d in sorted(by_distance):
         options = by_distance[d]
         chosen.append(next((k for k in options if "_e30_" in k), options[len(options) // 2]))
+    if closeup:
+        chosen = chosen[:max(count - 1, 0)] + [next((k for k in closeup if "_e30_" in k), closeup[0])]
     return chosen[:count]
 
 
-def comparison_grid(run_dir, tree, variants, path, views=3):
+def crop_view(view_dir):
+    """The view crops are cut from: a close-up if the run has them (leaf scale), else the nearest."""
+    keys = pick_views(view_dir, 99)
+    return [k for k in keys if k.startswith("closeup_")][:1] or keys[:1]
+
+
+def comparison_grid(run_dir, tree, variants, path, views=4):
     """Each view: a row of images (reference, methods) and a row of error maps under them."""
     tree_dir = run_dir / "images" / safe_name(tree)
     reference_dir = tree_dir / "reference"
@@ -195,7 +278,7 @@ def crops(run_dir, tree, variants, path, size=128):
     reference_dir = tree_dir / "reference"
     if not reference_dir.is_dir():
         return False
-    keys = pick_views(reference_dir, 1)
+    keys = crop_view(reference_dir)
     variants = [v for v in variants if (tree_dir / safe_name(v) / f"{keys[0]}.png").exists()] if keys else []
     if not variants:
         return False
@@ -284,6 +367,7 @@ def make_figures(run_dir: Path, out_root: Path):
         return False
     meta = json.loads(meta_path.read_text())
     rows = list(csv.DictReader(summary.open()))
+    closeups = meta.get("config", {}).get("views", {}).get("closeups")
     out = out_root / run_dir.name
     out.mkdir(parents=True, exist_ok=True)
     renderer = meta.get("gl", {}).get("renderer", "unknown")
@@ -293,10 +377,43 @@ def make_figures(run_dir: Path, out_root: Path):
     plot_per_tree(rows, trees, "fps_n", "trees in the forest", "FPS (median frame time)", True,
                   out / "fps_vs_trees.png")
     made.append("- `fps_vs_trees.png`: FPS = 1000 / median frame time along the forest orbit, log-log.")
+    plot_speedup_vs_trees(rows, trees, out / "speedup_vs_trees.png")
+    made.append("- `speedup_vs_trees.png`: speedup vs `polygonal` per forest size (median of per-block "
+                "ratios, blocks of both timed in turn on the same cameras); bars: interquartile range.")
+
+    def closeup_marks(axis, row, colour):
+        psnr = number(row.get("psnr_closeup"))
+        if closeups and psnr is not None:
+            axis.scatter([float(closeups.get("distance", 1.5))], [psnr], marker="*", s=90, color=colour,
+                         edgecolors="k", linewidths=0.4, zorder=3)
+
     plot_per_tree(rows, trees, "psnr_d", "camera distance (bounding radii)", "PSNR over coverage union (dB)",
-                  False, out / "psnr_vs_distance.png")
+                  False, out / "psnr_vs_distance.png", closeup_marks)
+    note = ""
+    if closeups:
+        note = (f"; stars: the close-up ring ({closeups.get('fov_deg', 8)}° field of view at "
+                f"{closeups.get('distance', 1.5)} radii), its own measurement")
     made.append("- `psnr_vs_distance.png`: mean PSNR over the views of each distance ring "
-                "(polygonal against itself is at the 100 dB cap).")
+                f"(polygonal against itself is at the 100 dB cap){note}.")
+
+    def fragments_point(row):
+        psnr = number(row.get("psnr"))
+        return [] if psnr is None or psnr >= 99.9 else [(number(row.get("fragments_per_pixel")), psnr, "")]
+
+    if plot_scatter_per_tree(rows, trees, fragments_point, "fragment-shader invocations per output pixel",
+                             "PSNR over coverage union (dB)", True, out / "psnr_vs_fragments.png"):
+        made.append("- `psnr_vs_fragments.png`: mean PSNR of the orbit views against what a view cost: "
+                    "fragment-shader invocations per output pixel (GL pipeline statistics).")
+
+    def forest_points(row):
+        return [(number(row.get(f"forest_flip_n{n}")), number(row.get(f"speedup_vs_polygonal_n{n}")),
+                 f"{n}") for n in forest_sizes(rows)]
+
+    if plot_scatter_per_tree(rows, trees, forest_points, "FLIP of the forest frames vs the reference's",
+                             "speedup vs polygonal", False, out / "speedup_vs_flip.png"):
+        made.append("- `speedup_vs_flip.png`: forest speedup against the mean LDR-FLIP of the forest frames "
+                    "scored against the reference's from the same cameras (labels: trees in the forest); "
+                    "a method cannot look fast by drawing less without moving right.")
     plot_memory_vs_psnr(rows, trees, out / "memory_vs_psnr.png")
     made.append("- `memory_vs_psnr.png`: GPU memory (ledger) against mean PSNR per variant; the step line "
                 "is the Pareto front (no other variant has less memory and more PSNR).")
@@ -307,11 +424,13 @@ def make_figures(run_dir: Path, out_root: Path):
         tree_variants = [r["variant"] for r in rows if r["tree"] == tree and r["variant"] in variants]
         name = f"comparison_grid_{safe_name(tree)}.png"
         if comparison_grid(run_dir, tree, tree_variants, out / name):
-            made.append(f"- `{name}`: rows of views (one per distance ring), the reference then each "
-                        "variant; under each image its per-pixel mean absolute sRGB error (colour bar).")
+            made.append(f"- `{name}`: rows of views (one per distance ring, then a close-up), the reference "
+                        "then each variant; under each image its per-pixel mean absolute sRGB error "
+                        "(colour bar).")
         name = f"crops_{safe_name(tree)}.png"
         if crops(run_dir, tree, tree_variants, out / name):
-            made.append(f"- `{name}`: 128×128-pixel close-ups of the nearest view at full resolution.")
+            made.append(f"- `{name}`: 128×128-pixel crops at full resolution of a close-up view (or the "
+                        "nearest view when the run has no close-up ring).")
         for keys, group in sweep_groups(tree_variants).items():
             name = f"crops_{safe_name(tree)}_{safe_name(keys)}.png"
             if crops(run_dir, tree, group, out / name):
@@ -337,7 +456,9 @@ def make_figures(run_dir: Path, out_root: Path):
 def main():
     results = Path(sys.argv[1] if len(sys.argv) > 1 else "results")
     out_root = Path(sys.argv[2]) if len(sys.argv) > 2 else Path(__file__).resolve().parent
-    runs = sorted(p for p in results.iterdir() if p.is_dir()) if results.is_dir() else []
+    # Runs moved aside by --fresh (<run>.previous-<time>) are history, not figures.
+    runs = sorted(p for p in results.iterdir() if p.is_dir() and ".previous-" not in p.name) \
+        if results.is_dir() else []
     if (results / "summary.csv").exists():
         runs = [results]
     made = [make_figures(run, out_root) for run in runs]

@@ -88,7 +88,6 @@ class Viewer {
         {gl::embeddedShader("viewer/composite.vert"), gl::embeddedShader("viewer/composite.frag")});
     mEmptyVao = gl::createVertexArray();
     gl::api().BindVertexArray(0);
-    gl::api().GenQueries(1, &mPrimitivesQuery);
     mForestSize = options.forest;
     mViewMode = options.view == "split" ? 1 : options.view == "error" ? 2 : 0;
     loadTree(mTreeIndex);
@@ -111,7 +110,6 @@ class Viewer {
       ImGui_ImplGlfw_Shutdown();
       ImGui::DestroyContext();
     }
-    if (mPrimitivesQuery) gl::api().DeleteQueries(1, &mPrimitivesQuery);
   }
 
   void run() {
@@ -306,17 +304,18 @@ class Viewer {
                 bool countPrimitives) {
     const gl::Api& g = gl::api();
     FrameContext frame =
-        mHarness->makeFrame(camera, target.width, target.height, mInstanceBuffer.id());
+        mHarness->makeFrame(camera, {target.width, target.height}, 1, mInstanceBuffer.id());
     frame.forcedLevel = mForcedLevel;
     // The shadow pass (lit, shadows on) renders into its own target, so it comes first.
     mHarness->prepareShadows(method, frame, std::span(mForest), mForestBounds);
     mHarness->beginFrame(target);
     if (mWireframe) g.PolygonMode(GL_FRONT_AND_BACK, GL_LINE);
-    if (countPrimitives) g.BeginQuery(GL_PRIMITIVES_GENERATED, mPrimitivesQuery);
+    if (countPrimitives) mHarness->statistics().begin();
     method.draw(frame, std::span(mForest));
     if (countPrimitives) {
-      g.EndQuery(GL_PRIMITIVES_GENERATED);
-      g.GetQueryObjectui64v(mPrimitivesQuery, GL_QUERY_RESULT, &mPrimitives);
+      mDrawn = mHarness->statistics().end();
+      const double leaves = double(mTree.leaves.size()) * double(mForest.size());
+      mLeafFraction = leaves > 0 ? double(method.leafPolygonsDrawn()) / leaves : 0.0;
     }
     if (mWireframe) g.PolygonMode(GL_FRONT_AND_BACK, GL_FILL);
   }
@@ -439,7 +438,10 @@ class Viewer {
       const gl::MemoryTotals memory = mLedger.totals("method");
       ImGui::Text("memory: %.2f MB texture, %.2f geometry, %.2f other", memory.texture / 1e6,
                   memory.geometry / 1e6, memory.other / 1e6);
-      ImGui::Text("primitives: %llu", static_cast<unsigned long long>(mPrimitives));
+      ImGui::Text("primitives: %llu, fragments: %llu",
+                  static_cast<unsigned long long>(mDrawn.primitives),
+                  static_cast<unsigned long long>(mDrawn.fragments));
+      ImGui::Text("leaves drawn as polygons: %.1f %%", 100.0 * mLeafFraction);
       ImGui::Text("%s", mContext->renderer().c_str());
     }
     if (ImGui::CollapsingHeader("camera")) {
@@ -528,8 +530,8 @@ class Viewer {
   std::unique_ptr<Harness> mHarness;
   gl::Program mComposite;
   gl::VertexArray mEmptyVao;
-  GLuint mPrimitivesQuery = 0;
-  GLuint64 mPrimitives = 0;
+  gl::DrawCounts mDrawn;       // of the shown method's last frame
+  double mLeafFraction = 0.0;  // its leaf_geometry_fraction
   bool mImGui = false;
   Shading mConfigShading = Shading::kUnlit;
 

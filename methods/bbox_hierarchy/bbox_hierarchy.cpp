@@ -225,10 +225,11 @@ class BboxHierarchy final : public Method {
 
   void draw(const FrameContext& frame, std::span<const Instance> instances) override {
     if (instances.empty()) return;
-    // Focal length in pixels: the LoD distance of a box is its world size per texel times it.
-    const float focal = frame.projection[1][1] * 0.5f * float(frame.viewportSize.y);
+    // A box switches to its images where one of its texels spans one output pixel: its LoD
+    // distance is its world size per texel times the output focal length (in pixels).
     std::vector<float> lodDistance(mHierarchy.nodes.size());
-    for (size_t n = 0; n < lodDistance.size(); ++n) lodDistance[n] = mWorldPerTexel[n] * focal;
+    for (size_t n = 0; n < lodDistance.size(); ++n)
+      lodDistance[n] = mWorldPerTexel[n] * frame.lodFocalPixels;
     std::vector<std::vector<glm::mat4>> boxLists(mHierarchy.nodes.size()),
         leafLists(mHierarchy.nodes.size());
     for (const Instance& instance : instances)
@@ -248,8 +249,12 @@ class BboxHierarchy final : public Method {
     }
     uploadMatrices(matrices);
     mSignature = 0xcbf29ce484222325ull;
-    for (size_t n = 0; n < boxLists.size(); ++n)
+    mLeafPolygonsDrawn = 0;
+    for (size_t n = 0; n < boxLists.size(); ++n) {
       if (!boxLists[n].empty()) mSignature = fnv1aMix(fnv1aMix(mSignature, n), boxLists[n].size());
+      const BoxNode& node = mHierarchy.nodes[n];
+      mLeafPolygonsDrawn += uint64_t(node.leafEnd - node.leafBegin) * leafLists[n].size();
+    }
     const gl::Api& g = gl::api();
     mProgram.use();
     setFrameUniforms(mProgram, frame);
@@ -290,6 +295,7 @@ class BboxHierarchy final : public Method {
   }
 
   uint64_t lodSignature() const override { return mSignature; }
+  uint64_t leafPolygonsDrawn() const override { return mLeafPolygonsDrawn; }
   nlohmann::json effectiveParams() const override { return writeParams(mParams); }
   nlohmann::json bakeReport() const override { return mReport; }
 
@@ -442,7 +448,8 @@ class BboxHierarchy final : public Method {
   std::vector<int32_t> mTextured;
   std::vector<uint32_t> mBoxFirstIndex;
   std::vector<float> mWorldPerTexel;
-  uint64_t mSignature = 0;  // of the boxes the last draw showed as images (popping metric)
+  uint64_t mSignature = 0;          // of the boxes the last draw showed as images (popping metric)
+  uint64_t mLeafPolygonsDrawn = 0;  // leaves the last draw drew as polygons, all instances
   uint32_t mLeafFirstIndex = 0;
   std::vector<MeshVertex> mVertices;
   std::vector<uint32_t> mIndices;

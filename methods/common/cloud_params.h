@@ -10,9 +10,11 @@ namespace canopy {
 // Parameters every billboard-cloud method shares: the clustering and the geometric LoD.
 struct CloudParams {
   ClusteringParams clustering;
-  bool lod = true;       // three clouds of K, K/3, K/10 billboards, switched by distance
-  float lodNear = 6.0f;  // below this distance (bounding radii) the K cloud is drawn
-  float lodFar = 20.0f;  // beyond this distance the K/10 cloud; K/3 in between
+  // Three clouds of K, K/3, K/10 billboards, switched per instance by the tree's projected size
+  // in output pixels (the bounding radius as FrameContext::projectedPixels measures it).
+  bool lod = true;
+  float lodNearPixels = 120.0f;  // the K cloud while the radius spans at least this many pixels
+  float lodFarPixels = 35.0f;    // the K/10 cloud below this; K/3 in between
 
   template <class Visitor>
   void visit(Visitor& v) {
@@ -21,20 +23,21 @@ struct CloudParams {
     v("compactness_weight", clustering.compactnessWeight, 0.0f, 1000.0f);
     v("cluster_iterations", clustering.iterations, 1, 1000);
     v("lod", lod);
-    v("lod_near", lodNear, 1.0f, 10000.0f);
-    v("lod_far", lodFar, 1.0f, 10000.0f);
+    v("lod_near_px", lodNearPixels, 0.01f, 100000.0f);
+    v("lod_far_px", lodFarPixels, 0.01f, 100000.0f);
   }
 
   std::vector<int> divisors() const {
     return lod ? std::vector<int>{1, 3, 10} : std::vector<int>{1};
   }
+  // Projected radii (output pixels) below which the next coarser cloud is drawn, decreasing.
   std::vector<float> thresholds() const {
-    return lod ? std::vector<float>{lodNear, lodFar} : std::vector<float>{};
+    return lod ? std::vector<float>{lodNearPixels, lodFarPixels} : std::vector<float>{};
   }
   void validate(const std::string& method) const {
-    if (lod && lodFar <= lodNear)
-      throwInputError("{}: parameter 'lod_far' ({}) must exceed 'lod_near' ({})", method, lodFar,
-                      lodNear);
+    if (lod && lodFarPixels >= lodNearPixels)
+      throwInputError("{}: parameter 'lod_far_px' ({}) must be below 'lod_near_px' ({})", method,
+                      lodFarPixels, lodNearPixels);
   }
 };
 

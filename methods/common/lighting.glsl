@@ -6,6 +6,7 @@
 uniform int uLit;              // 0: albedo only
 uniform vec3 uLightDirection;  // unit, towards the light (world)
 uniform float uAmbient;        // share of the ambient term
+uniform int uUseAmbientOcclusion;  // 0: baked occlusion is ignored (views.ambient_occlusion false)
 
 #ifdef CANOPY_LIT
 in vec3 vWorldPosition;
@@ -32,7 +33,7 @@ float lightVisibility(vec3 normal) {
 // The factor albedo is multiplied by: `normal` faces the viewer, `occlusion` scales the ambient.
 float lighting(vec3 normal, float occlusion) {
   if (uLit == 0) return 1.0;
-  return uAmbient * occlusion +
+  return uAmbient * (uUseAmbientOcclusion != 0 ? occlusion : 1.0) +
          (1.0 - uAmbient) * max(dot(normal, uLightDirection), 0.0) * lightVisibility(normal);
 }
 #else

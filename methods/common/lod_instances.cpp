@@ -11,10 +11,9 @@ void LodInstances::attach(gl::Device& device, std::string owner) {
   mOwner = std::move(owner);
 }
 
-int LodInstances::levelFor(float distanceInRadii, const std::vector<float>& thresholds) {
+int LodInstances::levelFor(float radiusPixels, const std::vector<float>& thresholds) {
   int level = 0;
-  while (level < static_cast<int>(thresholds.size()) && distanceInRadii >= thresholds[level])
-    ++level;
+  while (level < static_cast<int>(thresholds.size()) && radiusPixels < thresholds[level]) ++level;
   return level;
 }
 
@@ -29,7 +28,8 @@ void LodInstances::update(const FrameContext& frame, std::span<const Instance> i
     int level = frame.forcedLevel;
     if (level < 0) {
       const glm::vec3 centre = glm::vec3(model * glm::vec4(treeBounds.center(), 1.0f));
-      level = levelFor(glm::length(frame.cameraPosition - centre) / (radius * instance.scale),
+      level = levelFor(frame.projectedPixels(radius * instance.scale,
+                                             glm::length(frame.cameraPosition - centre)),
                        thresholds);
     }
     byLevel[std::min(level, levels - 1)].push_back(model);

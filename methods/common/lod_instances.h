@@ -10,9 +10,9 @@
 
 namespace canopy {
 
-// Sorts a frame's instances into levels of detail by their distance to the camera, measured from
-// each instance's bounding-sphere centre in (scaled) bounding radii, and uploads their matrices
-// level by level into one buffer. Shared by the methods with geometric LoD.
+// Sorts a frame's instances into levels of detail by their projected size in output pixels (the
+// instance's bounding radius seen from the camera, FrameContext::projectedPixels) and uploads
+// their matrices level by level into one buffer. Shared by the methods with geometric LoD.
 class LodInstances {
  public:
   struct Range {
@@ -22,8 +22,9 @@ class LodInstances {
 
   // The device and owner are remembered at upload, so the buffer is charged to the method.
   void attach(gl::Device& device, std::string owner);
-  // Level i holds instances closer than thresholds[i] radii; the last level the rest.
-  // frame.forcedLevel >= 0 puts every instance in that level.
+  // `thresholds` decrease: an instance whose radius spans fewer than thresholds[i] pixels goes
+  // past level i; level 0 holds the largest, the last level the rest. frame.forcedLevel >= 0 puts
+  // every instance in that level.
   void update(const FrameContext& frame, std::span<const Instance> instances,
               const Aabb& treeBounds, const std::vector<float>& thresholds);
   GLuint buffer() const { return mBuffer.id(); }
@@ -31,8 +32,8 @@ class LodInstances {
   uint64_t signature() const { return mSignature; }
   const std::vector<Range>& ranges() const { return mRanges; }
 
-  // The level one instance at `distanceInRadii` gets.
-  static int levelFor(float distanceInRadii, const std::vector<float>& thresholds);
+  // The level an instance whose bounding radius spans `radiusPixels` output pixels gets.
+  static int levelFor(float radiusPixels, const std::vector<float>& thresholds);
 
  private:
   gl::Device* mDevice = nullptr;

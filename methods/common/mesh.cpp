@@ -33,6 +33,7 @@ void setFrameUniforms(const gl::Program& program, const FrameContext& frame) {
   program.set("uLit", frame.shading == Shading::kLit ? 1 : 0);
   program.set("uLightDirection", frame.lightDirection);
   program.set("uAmbient", frame.ambient);
+  program.set("uUseAmbientOcclusion", frame.ambientOcclusion ? 1 : 0);
   program.set("uShadows", frame.shadowMap != 0 && frame.shading == Shading::kLit ? 1 : 0);
   program.set("uShadowMap", kShadowMapUnit);
   program.set("uLightViewProjection", frame.lightViewProjection);

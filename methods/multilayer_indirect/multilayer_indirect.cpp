@@ -283,6 +283,7 @@ class MultilayerIndirect final : public Method {
         g.BindTexture(GL_TEXTURE_2D, mLowResTexture.id());
       } else {
         bindLayeredTextures(program);
+        program.set("uTargetPixelsPerOutputPixel", frame.targetPixelsPerOutputPixel);
       }
     });
     g.ActiveTexture(GL_TEXTURE0);

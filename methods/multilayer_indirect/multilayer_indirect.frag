@@ -20,6 +20,7 @@ uniform int uImagesPerSide;      // tilts × rotations: offset between front and
 uniform int uRotations;          // orientation bins of the Leaves Texture
 uniform int uTilts;
 uniform float uLodFactor;        // entries = factor × projected hash-texel diagonal (px); 0: all
+uniform float uTargetPixelsPerOutputPixel;  // supersampling: derivatives count target pixels
 #include "methods/common/lighting.glsl"
 uniform sampler2D uLowResOcclusion;  // AO over the low-resolution atlas (R)
 uniform int uHasLowResOcclusion;
@@ -62,7 +63,9 @@ void main() {
   vec2 planeDx = dFdx(plane), planeDy = dFdy(plane);
   int budget = listLength;
   if (uLodFactor > 0.0) {
-    float pixelsPerCell = 1.0 / max(max(length(dFdx(grid)), length(dFdy(grid))), 1e-6);
+    // In output pixels, as every LoD decision (FrameContext), whatever the supersampling.
+    float pixelsPerCell = 1.0 / max(max(length(dFdx(grid)), length(dFdy(grid))), 1e-6) /
+                          uTargetPixelsPerOutputPixel;
     budget = min(listLength, int(ceil(uLodFactor * 1.41421356 * pixelsPerCell)));
   }
   bool fromFront = gl_FrontFacing;  // billboards are counter-clockwise seen from their front

@@ -5,6 +5,7 @@
 
 #include "common/config.h"
 #include "common/image.h"
+#include "methods/common/ambient_occlusion.h"
 #include "methods/common/mesh.h"
 
 namespace canopy {
@@ -13,11 +14,18 @@ namespace {
 struct PolygonalParams {
   bool drawWood = true;  // draw the trunk and branches (false: leaves only)
   bool mipmaps = true;   // mipmapped leaf textures (trilinear) as a real engine would draw them
+  // Lit runs: the leaves' ambient term scaled by Embree AO at their corners, computed exactly as
+  // the impostors bake theirs (methods/common/ambient_occlusion), so a lit comparison does not
+  // count AO as error. Baked only for lit runs with views.ambient_occlusion on.
+  bool ambientOcclusion = true;
+  int aoRays = 32;  // rays per leaf corner (multilayer_indirect's default)
 
   template <class Visitor>
   void visit(Visitor& v) {
     v("wood", drawWood);
     v("mipmaps", mipmaps);
+    v("ambient_occlusion", ambientOcclusion);
+    v("ao_rays", aoRays, 1, 4096);
   }
 };
 
@@ -32,11 +40,15 @@ class Polygonal final : public Method {
  public:
   explicit Polygonal(PolygonalParams params) : mParams(params) {}
 
-  void bake(const Tree& tree, BakeContext&) override {
+  void bake(const Tree& tree, BakeContext& ctx) override {
     mWood.bake(tree);
     mVertices.clear();
     mIndices.clear();
     mRanges.clear();
+    mOcclusion.clear();
+    std::vector<glm::vec4> corners;
+    if (mParams.ambientOcclusion && ctx.ambientOcclusion && ctx.shading == Shading::kLit)
+      corners = computeLeafCornerOcclusion(tree, mParams.aoRays, ctx.seed);
     // Four vertices per leaf, leaves grouped by texture.
     std::vector<uint32_t> order(tree.leaves.size());
     std::iota(order.begin(), order.end(), 0u);
@@ -49,8 +61,10 @@ class Polygonal final : public Method {
         mRanges.push_back({static_cast<uint32_t>(mIndices.size()), 0, leaf.texture});
       }
       const auto base = static_cast<uint32_t>(mVertices.size());
-      for (int c = 0; c < 4; ++c)
+      for (int c = 0; c < 4; ++c) {
         mVertices.push_back({leaf.corner(c), leaf.normal, leaf.cornerUv(c)});
+        if (!corners.empty()) mOcclusion.push_back(corners[index][c]);
+      }
       for (uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) mIndices.push_back(base + k);
       mRanges.back().count += 6;
     }
@@ -66,6 +80,17 @@ class Polygonal final : public Method {
     mIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mIndices,
                                "leaf indices");
     mVao = makeMeshVertexArray(mVbo, mIbo);
+    if (!mOcclusion.empty()) {
+      mOcclusionVbo = device.createBuffer(MemoryCategory::kGeometry, GL_ARRAY_BUFFER, mOcclusion,
+                                          "leaf corner ambient occlusion");
+      const gl::Api& g = gl::api();
+      g.BindVertexArray(mVao.id());
+      g.BindBuffer(GL_ARRAY_BUFFER, mOcclusionVbo.id());
+      g.EnableVertexAttribArray(3);
+      g.VertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, sizeof(float), nullptr);
+      g.BindVertexArray(0);
+      g.BindBuffer(GL_ARRAY_BUFFER, 0);
+    }
     mTextures.clear();
     for (const auto& [front, back] : mLeafImages) {
       // One layer when the underside is the same image (most files), two otherwise.
@@ -93,6 +118,7 @@ class Polygonal final : public Method {
     mProgram.use();
     setFrameUniforms(mProgram, frame);
     mProgram.set("uLeafImages", 0);
+    mProgram.set("uHasVertexOcclusion", mOcclusion.empty() ? 0 : 1);
     g.BindVertexArray(mVao.id());
     bindInstanceMatrices(frame.instanceBuffer, 4);
     g.ActiveTexture(GL_TEXTURE0);
@@ -104,9 +130,11 @@ class Polygonal final : public Method {
                               reinterpret_cast<const void*>(sizeof(uint32_t) * range.first), count);
     }
     g.BindVertexArray(0);
+    mLeafPolygonsDrawn = uint64_t(mIndices.size() / 6) * instances.size();
     if (mParams.drawWood) mWood.draw(frame, instances.size());
   }
 
+  uint64_t leafPolygonsDrawn() const override { return mLeafPolygonsDrawn; }
   nlohmann::json effectiveParams() const override { return writeParams(mParams); }
 
   void save(AssetFolder& asset) const override {
@@ -115,6 +143,7 @@ class Polygonal final : public Method {
     asset.writeBlob("leaf_vertices.bin", mVertices);
     asset.writeBlob("leaf_indices.bin", mIndices);
     asset.writeBlob("leaf_ranges.bin", mRanges);
+    asset.writeBlob("leaf_occlusion.bin", mOcclusion);
     for (size_t i = 0; i < mLeafImages.size(); ++i) {
       asset.writeImage(fmt::format("leaf_{}_front.png", i), mLeafImages[i].first);
       asset.writeImage(fmt::format("leaf_{}_back.png", i), mLeafImages[i].second);
@@ -131,6 +160,9 @@ class Polygonal final : public Method {
     mVertices = asset.readBlobAs<MeshVertex>("leaf_vertices.bin");
     mIndices = asset.readBlobAs<uint32_t>("leaf_indices.bin");
     mRanges = asset.readBlobAs<LeafRange>("leaf_ranges.bin");
+    mOcclusion = asset.readBlobAs<float>("leaf_occlusion.bin");
+    if (!mOcclusion.empty() && mOcclusion.size() != mVertices.size())
+      throwInputError("{}: leaf occlusion does not match the leaf vertices", folder);
     mLeafImages.clear();
     for (size_t i = 0; i < header.at("leaf_textures").get<size_t>(); ++i) {
       mLeafImages.push_back({asset.readImage(fmt::format("leaf_{}_front.png", i)),
@@ -153,8 +185,10 @@ class Polygonal final : public Method {
   std::vector<MeshVertex> mVertices;
   std::vector<uint32_t> mIndices;
   std::vector<LeafRange> mRanges;
+  std::vector<float> mOcclusion;  // per leaf vertex (lit runs with AO), else empty
   std::vector<std::pair<ImageRgba8, ImageRgba8>> mLeafImages;  // front, back
-  gl::Buffer mVbo, mIbo;
+  uint64_t mLeafPolygonsDrawn = 0;
+  gl::Buffer mVbo, mIbo, mOcclusionVbo;
   gl::VertexArray mVao;
   std::vector<gl::Texture> mTextures;
   gl::Program mProgram;

@@ -342,6 +342,7 @@ TEST(Report, LatexTableHasOneCellPerColumnAndEscapesNames) {
        {"psnr", 20.0},
        {"psnr_frame", 30.0},
        {"ssim", 0.5},
+       {"flip", 0.2},
        {"coverage_error", 0.1}},
       {{"kind", "forest"},
        {"tree", "oak_1"},
@@ -353,9 +354,9 @@ TEST(Report, LatexTableHasOneCellPerColumnAndEscapesNames) {
        {"frame_ms_p95", 30.0},
        {"speedup_vs_polygonal", 2.0}}};
   const std::string tex = formatSummaryLatex(summarize(records), "run_1", "llvmpipe");
-  EXPECT_NE(tex.find("\\begin{tabular}{llrrrrrr}"), std::string::npos)
-      << tex;  // 2 text + 6 numbers
-  EXPECT_NE(tex.find("oak\\_1 & m[a=1] & 1.50 & 1.00 & 20.00 & 0.500 & 0.100 & 42.0 \\\\"),
+  EXPECT_NE(tex.find("\\begin{tabular}{llrrrrrrr}"), std::string::npos)
+      << tex;  // 2 text + 7 numbers
+  EXPECT_NE(tex.find("oak\\_1 & m[a=1] & 1.50 & 1.00 & 20.00 & 0.500 & 0.200 & 0.100 & 2.00 \\\\"),
             std::string::npos)
       << tex;
   EXPECT_NE(tex.find("\\toprule"), std::string::npos);

@@ -31,7 +31,7 @@ TEST_P(Shadows, OnlyTakeLightAwayAndDarkenTheTree) {
   settings.shading = Shading::kLit;
   settings.lightDirection = {0.2f, 1.0f, 0.3f};
   Harness harness(device, settings);
-  harness.setTreeBounds(tree.bounds);
+  harness.setTree(tree.bounds, tree.leaves.size());
   auto method = builtinMethods().find(GetParam()).create(nlohmann::json::object(), "test");
   BakeContext bake;
   method->bake(tree, bake);
@@ -66,6 +66,57 @@ INSTANTIATE_TEST_SUITE_P(LitMethods, Shadows,
                          [](const testing::TestParamInfo<std::string>& info) {
                            return info.param;
                          });
+
+}  // namespace
+}  // namespace canopy
+
+namespace canopy {
+namespace {
+
+// Lit fairness: in lit runs the reference's leaves get the Embree AO the impostors bake, so AO
+// is not error; views.ambient_occlusion false turns it off for the reference and impostors.
+TEST(LitFairness, TheReferenceGetsTheImpostorsAmbientOcclusionOrNobodyDoes) {
+  auto context = test::makeTestContext();
+  gl::Ledger ledger;
+  gl::Device device(ledger);
+  const Tree tree = test::smallTree(600, 5);
+  RenderSettings settings;
+  settings.width = settings.height = 96;
+  settings.shading = Shading::kLit;
+  Harness harness(device, settings);
+  harness.setTree(tree.bounds, tree.leaves.size());
+  const auto bake = [&](const std::string& name, const nlohmann::json& params, Shading shading,
+                        const std::string& owner) {
+    auto method = builtinMethods().find(name).create(params, "test");
+    BakeContext context;
+    context.shading = shading;
+    method->bake(tree, context);
+    gl::Device::OwnerScope scope(device, owner);
+    method->upload(device);
+    return method;
+  };
+  const Camera camera = orbitCamera(tree.bounds, {2.5f, 20.0f, 30.0f}, 40.0f);
+  // Baked for a lit run, the reference carries AO (its ledger shows the per-vertex values) and
+  // its ambient term is darker than the same reference baked for an unlit run.
+  auto withAo = bake("polygonal", nlohmann::json::object(), Shading::kLit, "ao");
+  auto withoutAo = bake("polygonal", nlohmann::json::object(), Shading::kUnlit, "plain");
+  EXPECT_GT(ledger.totals("ao").geometry, ledger.totals("plain").geometry);
+  const ImageRgba8 occluded = harness.render(*withAo, camera);
+  const ImageRgba8 open = harness.render(*withoutAo, camera);
+  EXPECT_LT(meanLuma(occluded), meanLuma(open) - 1.0);
+  // Off for everyone: the flag makes AO-baked and AO-free bakes render the same image, for the
+  // reference and for an impostor that bakes AO.
+  harness.settings().ambientOcclusion = false;
+  EXPECT_EQ(harness.render(*withAo, camera), harness.render(*withoutAo, camera));
+  const nlohmann::json cloud = {{"clusters", 30}, {"hash_resolution", 8}};
+  nlohmann::json noAo = cloud;
+  noAo["ambient_occlusion"] = false;
+  auto layered = bake("multilayer_indirect", cloud, Shading::kLit, "ml");
+  auto layeredPlain = bake("multilayer_indirect", noAo, Shading::kLit, "ml_plain");
+  EXPECT_EQ(harness.render(*layered, camera), harness.render(*layeredPlain, camera));
+  harness.settings().ambientOcclusion = true;
+  EXPECT_NE(harness.render(*layered, camera), harness.render(*layeredPlain, camera));
+}
 
 }  // namespace
 }  // namespace canopy

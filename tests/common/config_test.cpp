@@ -44,6 +44,38 @@ TEST(Config, OutOfRangeAndWrongTypesAreErrors) {
   EXPECT_NE(errorOf(json::object()).find("name"), std::string::npos);
 }
 
+TEST(Config, FairHarnessSettingsAreCheckedAndNamed) {
+  EXPECT_NE(
+      errorOf({{"name", "x"}, {"views", {{"closeups", {{"fov", 8}}}}}}).find("views.closeups.fov"),
+      std::string::npos);
+  EXPECT_NE(errorOf({{"name", "x"}, {"views", {{"closeups", {{"fov_deg", 0.1}}}}}})
+                .find("views.closeups.fov_deg"),
+            std::string::npos);
+  EXPECT_NE(errorOf({{"name", "x"}, {"views", {{"flip_ppd", 0}}}}).find("views.flip_ppd"),
+            std::string::npos);
+  EXPECT_NE(errorOf({{"name", "x"}, {"views", {{"ambient_occlusion", 1}}}})
+                .find("views.ambient_occlusion"),
+            std::string::npos);
+  EXPECT_NE(
+      errorOf({{"name", "x"}, {"forests", {{"frames", 4}, {"blocks", 5}}}}).find("forests.blocks"),
+      std::string::npos);
+  const ExperimentConfig config = parseExperimentConfig(
+      {{"name", "c"},
+       {"views",
+        {{"flip_ppd", 40},
+         {"ambient_occlusion", false},
+         {"closeups", {{"distance", 2}, {"fov_deg", 6}, {"azimuths", 3}, {"elevations", {10}}}}}},
+       {"forests", {{"frames", 3}}}},
+      "");
+  EXPECT_TRUE(config.views.closeups.enabled);
+  EXPECT_FLOAT_EQ(config.views.closeups.fovYDegrees, 6.0f);
+  EXPECT_EQ(config.views.closeups.azimuths, 3);
+  EXPECT_DOUBLE_EQ(config.views.render.flipPixelsPerDegree, 40.0);
+  EXPECT_FALSE(config.views.render.ambientOcclusion);
+  EXPECT_EQ(config.forests.timing.blocks, 3) << "without blocks: as many as the frames allow";
+  EXPECT_FALSE(parseExperimentConfig({{"name", "d"}}, "").views.closeups.enabled);
+}
+
 TEST(Config, ListsInParamsAreSweeps) {
   const auto points = expandSweep({{"a", {1, 2}}, {"b", {"x", "y", "z"}}, {"c", 5}});
   ASSERT_EQ(points.size(), 6u);

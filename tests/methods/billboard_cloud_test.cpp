@@ -106,7 +106,7 @@ TEST(ClusteringBadInput, ClusterCountOutOfRangeNamesTheParameter) {
   EXPECT_THROW(create({{"clusters", 0}}, "test"), InputError);
   EXPECT_THROW(create({{"density", 0.0}}, "test"), InputError);
   EXPECT_THROW(create({{"density", -5.0}}, "test"), InputError);
-  EXPECT_THROW(create({{"lod_near", 30.0}, {"lod_far", 10.0}}, "test"), InputError);
+  EXPECT_THROW(create({{"lod_near_px", 30.0}, {"lod_far_px", 60.0}}, "test"), InputError);
 }
 
 TEST(MinimumAreaRectangle, FindsTheRotatedRectangle) {

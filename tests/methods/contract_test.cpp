@@ -34,8 +34,12 @@ class MethodContract : public testing::TestWithParam<std::string> {
     return nlohmann::json::object();
   }
 
-  std::unique_ptr<Method> bakeAndUpload(const Tree& tree, const std::string& owner) {
-    auto method = create(quickParams(GetParam()));
+  // The method under test, or `other` (e.g. the reference) when given.
+  std::unique_ptr<Method> bakeAndUpload(const Tree& tree, const std::string& owner,
+                                        const std::string& other = "") {
+    auto method = other.empty()
+                      ? create(quickParams(GetParam()))
+                      : builtinMethods().find(other).create(nlohmann::json::object(), "t");
     BakeContext context;
     context.seed = 11;
     // Image-based methods photograph the tree through the reference, as the runner does.
@@ -162,13 +166,53 @@ TEST_P(MethodContract, SavedAssetLoadsAndRendersTheSame) {
 TEST_P(MethodContract, DrawsForestsWithoutGlErrors) {
   const Tree tree = test::smallTree();
   auto method = bakeAndUpload(tree, "m");
+  auto reference = bakeAndUpload(tree, "reference", "polygonal");
+  mHarness->setTree(tree.bounds, tree.leaves.size());
   const auto forest = layoutForest(9, tree.boundingSphereRadius(), 3);
-  const FrameTimes times = mHarness->timeForest(*method, forest, tree.bounds, 3, 1, 64, 64);
-  EXPECT_EQ(times.frames, 3);
-  EXPECT_GT(times.medianMs, 0.0);
-  const ImageRgba8 frame = mHarness->renderForestFrame(*method, forest, tree.bounds, 0, 3, 96, 96);
+  ForestTiming timing;
+  timing.frames = 4;
+  timing.warmup = 1;
+  timing.blocks = 2;
+  timing.width = timing.height = 64;
+  const InterleavedTimes times =
+      mHarness->timeInterleaved(*reference, *method, forest, tree.bounds, timing);
+  EXPECT_EQ(times.method.frames, 4);
+  EXPECT_EQ(times.reference.frames, 4);
+  EXPECT_GT(times.method.medianMs, 0.0);
+  EXPECT_EQ(times.blockRatios.size(), 2u);
+  EXPECT_GT(times.speedupMedian, 0.0);
+  EXPECT_GT(times.referenceCoverage, 0.0);
+  EXPECT_GT(times.drawn.counts.primitives, 0u);
+  EXPECT_GE(times.flip, 0.0);
+  EXPECT_LE(times.flip, 1.0);
+  const Camera camera = forestCamera(forest, tree.bounds, 0, 3, 40.0f);
+  const ImageRgba8 frame =
+      mHarness->renderForestFrame(*method, forest, tree.bounds, camera, 96, 96);
   EXPECT_GT(coveredPixels(frame), 0);
   EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
+}
+
+// The fair-harness rule: level of detail follows the output image, not the supersampled target,
+// so the same view at supersample 1 and 2 draws the same primitives (counted by GL queries) and
+// the same share of leaves as polygons; only the filtering differs. Views from near to far, so
+// every level of every method is crossed.
+TEST_P(MethodContract, LevelOfDetailDoesNotDependOnSupersampling) {
+  const Tree tree = test::smallTree();
+  auto method = bakeAndUpload(tree, "m");
+  mHarness->setTree(tree.bounds, tree.leaves.size());
+  for (const float distance : {1.5f, 3.0f, 8.0f, 24.0f, 60.0f}) {
+    const Camera camera = orbitCamera(tree.bounds, {distance, 30.0f, 30.0f}, 40.0f);
+    DrawnStats drawn[2];
+    for (int s : {1, 2}) {
+      mHarness->settings().supersample = s;
+      mHarness->renderLinearAt(*method, camera, 96, 96, &drawn[s - 1]);
+    }
+    EXPECT_GT(drawn[0].counts.primitives, 0u) << distance;
+    EXPECT_EQ(drawn[0].counts.primitives, drawn[1].counts.primitives) << "distance " << distance;
+    EXPECT_EQ(drawn[0].leafGeometryFraction, drawn[1].leafGeometryFraction)
+        << "distance " << distance;
+  }
+  mHarness->settings().supersample = 2;
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryRegisteredMethod, MethodContract,

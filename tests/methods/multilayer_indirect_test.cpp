@@ -277,8 +277,8 @@ TEST(MultilayerIndirect, LowResolutionAmbientOcclusionDarkensOnlyLitFarTrees) {
   for (const bool occlusion : {false, true}) {
     methods[occlusion] = bench.bake(tree,
                                     {{"clusters", 100},
-                                     {"lod_near", 1.01},
-                                     {"lod_far", 1.02},
+                                     {"lod_near_px", 100000.0},  // the far level at any size
+                                     {"lod_far_px", 99999.0},
                                      {"wood", false},
                                      {"ambient_occlusion", occlusion}},
                                     occlusion ? "ao" : "plain");

@@ -1,0 +1,67 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/experiment.h"
+#include "bench/harness.h"
+#include "bench/results_store.h"
+#include "bench/runner.h"
+#include "bench/tree_session.h"
+
+namespace canopy {
+
+// What every stage of a run reads: the config, the options, where records go, and the GL pieces.
+struct RunContext {
+  const ExperimentConfig& config;
+  const RunOptions& options;
+  ResultsStore& store;
+  gl::Device& device;
+  Harness& harness;
+  std::string renderer;  // GL_RENDERER, in bake and forest records
+};
+
+// One method variant on one tree: the record keys it writes under and the fields every record
+// of it starts with.
+struct VariantRun {
+  const MethodVariant& variant;
+  std::string prefix;     // "<tree>|<variant>|": record keys are prefix + what
+  nlohmann::json common;  // tree, method, variant
+  nlohmann::json params;  // effective parameters (from the bake)
+};
+
+// What a variant still has to do on a tree; a resumed run skips the rest.
+struct PendingWork {
+  bool bake = true;
+  std::vector<const EvalView*> views;
+  std::vector<int> forests;
+  std::vector<std::string> popping;  // path names
+  bool done() const { return !bake && views.empty() && forests.empty() && popping.empty(); }
+};
+PendingWork pendingWork(const RunContext& run, const TreeSession& session, const VariantRun& v);
+
+// The equal-memory (or PSNR-target) search over the method's memory knob (bench/budget.h);
+// returns the bake record's "budget" object.
+nlohmann::json runBudget(RunContext& run, TreeSession& session, const VariantRun& v,
+                         const MemoryKnob& knob);
+
+// Renders and scores every pending view against the reference: PSNR, SSIM, FLIP, coverage and
+// what was drawn, one kind:"view" record each.
+void runViews(RunContext& run, TreeSession& session, const VariantRun& v, Method& method,
+              const std::vector<const EvalView*>& views);
+
+// Times every pending forest size interleaved with the reference and scores its frames, one
+// kind:"forest" record each.
+void runForests(RunContext& run, TreeSession& session, const VariantRun& v, Method& method,
+                const std::vector<int>& sizes);
+
+// The popping metric along each pending path, one kind:"popping" record each.
+void runPopping(RunContext& run, TreeSession& session, const VariantRun& v, Method& method,
+                const std::vector<std::string>& paths);
+
+// {"primitives", "fragments", "leaf_geometry_fraction"}, as view and forest records carry it.
+nlohmann::json drawnJson(const DrawnStats& drawn);
+
+}  // namespace canopy
