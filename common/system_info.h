@@ -11,11 +11,12 @@ uint64_t peakRssBytes();
 // case peaks measured afterwards are process-wide.
 bool resetPeakRss();
 std::string cpuModel();
-// `git rev-parse HEAD` of the source tree the binary was built from, "+dirty" when its code
-// (common, methods, bench, viewer, the build files) is modified; "unknown" outside a checkout.
+// `git rev-parse HEAD` of the source tree the binary was built from (read at build time),
+// "+dirty" when its code (common, methods, bench, viewer, the build files) was modified;
+// "unknown" outside a checkout.
 std::string gitCommit();
-// gitCommit(), and for a modified tree a hash of the change ("<commit>+dirty.<fnv1a64 of the
-// diff>"): what a resumed run must match.
+// gitCommit(), and for a modified tree a hash of the change ("<commit>+dirty.<first 16 hex of
+// the SHA-256 of the diff>"): what a resumed run must match.
 std::string codeVersion();
 std::string isoTimestampUtc();
 

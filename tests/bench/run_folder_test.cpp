@@ -70,7 +70,9 @@ TEST_F(RunFolderCli, AChangedConfigIsRefusedAndFreshMovesTheOldRunAside) {
   ASSERT_EQ(aside.size(), 1u);
   EXPECT_EQ(recordsOf(aside[0]).size(), before.size());
   for (const auto& record : recordsOf(out())) {
-    if (record.at("kind") == "view") EXPECT_EQ(record.at("resolution")[0], 32);
+    if (record.at("kind") == "view") {
+      EXPECT_EQ(record.at("resolution")[0], 32);
+    }
   }
   const auto meta = readJsonFile((out() / "meta.json").string());
   EXPECT_EQ(meta.at("config").at("views").at("resolution")[0], 32);
