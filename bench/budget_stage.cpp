@@ -29,8 +29,8 @@ double meanPsnr(RunContext& run, TreeSession& session, Method& method) {
 
 }  // namespace
 
-nlohmann::json runBudget(RunContext& run, TreeSession& session, const VariantRun& v,
-                         const MemoryKnob& knob) {
+BudgetRecord runBudget(RunContext& run, TreeSession& session, const VariantRun& v,
+                       const MemoryKnob& knob) {
   const BudgetSettings& budget = *run.config.budget;
   std::map<double, double> memoryAt;
   // One trial: the variant with the knob at `value`, under its own ledger owner (released when
@@ -41,7 +41,7 @@ nlohmann::json runBudget(RunContext& run, TreeSession& session, const VariantRun
     variant.label += "/budget";
     BakedMethod baked =
         bakeMethod(variant, session.tree(), run.device, session.bakeContext(), std::nullopt);
-    memoryAt[value] = baked.record["memory_bytes"]["total"].get<double>() / 1e6;
+    memoryAt[value] = double(baked.record.memory.total) / 1e6;
     return baked;
   };
   spdlog::info("{} on {}: searching {} for the budget", v.variant.label, session.label(),
@@ -69,21 +69,19 @@ nlohmann::json runBudget(RunContext& run, TreeSession& session, const VariantRun
         },
         budget.maxSteps);
   }
-  nlohmann::json trace = nlohmann::json::array();
+  BudgetRecord record;
+  record.mode = budget.memoryMb > 0.0 ? "memory_mb" : "psnr_db";
+  record.target = budget.memoryMb > 0.0 ? budget.memoryMb : budget.psnrDb;
+  record.tolerance = budget.tolerance;
+  record.parameter = knob.parameter;
+  record.value = knobValue(knob, search.value);
+  record.measured = search.measured;
+  record.memoryMb = memoryAt[search.value];
+  record.reached = search.reached;
+  record.steps = search.steps;
   for (const auto& [value, measured] : search.trace)
-    trace.push_back({{"value", knobValue(knob, value)},
-                     {"measured", measured},
-                     {"memory_mb", memoryAt[value]}});
-  return {{"mode", budget.memoryMb > 0.0 ? "memory_mb" : "psnr_db"},
-          {"target", budget.memoryMb > 0.0 ? budget.memoryMb : budget.psnrDb},
-          {"tolerance", budget.tolerance},
-          {"parameter", knob.parameter},
-          {"value", knobValue(knob, search.value)},
-          {"measured", search.measured},
-          {"memory_mb", memoryAt[search.value]},
-          {"reached", search.reached},
-          {"steps", search.steps},
-          {"trace", trace}};
+    record.trace.push_back({knobValue(knob, value), measured, memoryAt[value]});
+  return record;
 }
 
 }  // namespace canopy

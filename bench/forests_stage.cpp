@@ -1,5 +1,7 @@
 // The forests stage: each pending forest size timed interleaved with the reference on the same
 // camera path (Harness::timeInterleaved) and its frames scored against the reference's.
+#include <cmath>
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -7,13 +9,6 @@
 #include "common/progress.h"
 
 namespace canopy {
-namespace {
-
-nlohmann::json numberOrNull(bool present, double value) {
-  return present ? nlohmann::json(value) : nlohmann::json();
-}
-
-}  // namespace
 
 void runForests(RunContext& run, TreeSession& session, const VariantRun& v, Method& method,
                 const std::vector<int>& sizes) {
@@ -35,31 +30,30 @@ void runForests(RunContext& run, TreeSession& session, const VariantRun& v, Meth
           "the camera path; timing empty frames measures nothing (check forests.camera_path)",
           size);
     }
-    nlohmann::json record = v.common;
-    record.update(
-        {{"kind", "forest"},
-         {"params", v.params},
-         {"trees", size},
-         {"frames", times.method.frames},
-         {"warmup", timing.warmup},
-         {"blocks", times.blockRatios.size()},
-         {"resolution", {timing.width, timing.height}},
-         {"frame_ms_median", times.method.medianMs},
-         {"frame_ms_p95", times.method.p95Ms},
-         {"frame_ms_mean", times.method.meanMs},
-         {"fps", 1000.0 / times.method.medianMs},
-         {"polygonal_frame_ms_median", numberOrNull(compared, times.reference.medianMs)},
-         {"speedup_vs_polygonal", numberOrNull(compared, times.speedupMedian)},
-         {"speedup_spread",
-          compared ? nlohmann::json({times.speedupQ25, times.speedupQ75}) : nlohmann::json()},
-         {"block_speedups", compared ? nlohmann::json(times.blockRatios) : nlohmann::json()},
-         {"psnr", numberOrNull(compared, times.psnr)},
-         {"flip", numberOrNull(compared, times.flip)},
-         {"coverage_error", numberOrNull(compared, times.coverageError)},
-         {"reference_coverage", numberOrNull(compared, times.referenceCoverage)},
-         {"drawn", drawnJson(times.drawn)},
-         {"gl_renderer", run.renderer}});
-    run.store.append(record, v.prefix + fmt::format("forest|{}", size));
+    const double nan = std::nan("");
+    ForestRecord record = v.record<ForestRecord>();
+    record.trees = size;
+    record.frames = times.method.frames;
+    record.warmup = timing.warmup;
+    record.blocks = static_cast<int>(times.blockRatios.size());
+    record.resolution = {timing.width, timing.height};
+    record.frameMsMedian = times.method.medianMs;
+    record.frameMsP95 = times.method.p95Ms;
+    record.frameMsMean = times.method.meanMs;
+    record.fps = 1000.0 / times.method.medianMs;
+    record.polygonalFrameMsMedian = compared ? times.reference.medianMs : nan;
+    record.speedupVsPolygonal = compared ? times.speedupMedian : nan;
+    if (compared) {
+      record.speedupSpread = std::array<double, 2>{times.speedupQ25, times.speedupQ75};
+      record.blockSpeedups = times.blockRatios;
+    }
+    record.psnr = compared ? times.psnr : nan;
+    record.flip = compared ? times.flip : nan;
+    record.coverageError = compared ? times.coverageError : nan;
+    record.referenceCoverage = compared ? times.referenceCoverage : nan;
+    record.drawn = drawnRecord(times.drawn);
+    record.glRenderer = run.renderer;
+    run.store.append(std::move(record), v.prefix + fmt::format("forest|{}", size));
     if (compared) {
       spdlog::info(
           "{} on {}, {} trees: {:.1f} ms ({:.2f}× polygonal, IQR {:.2f}–{:.2f}), "

@@ -8,6 +8,7 @@
 
 #include "bench/report.h"
 #include "bench/results_store.h"
+#include "bench/run_meta.h"
 #include "common/atomic_file.h"
 #include "common/config.h"
 #include "common/error.h"
@@ -17,7 +18,7 @@ namespace canopy {
 
 void mergeRuns(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& out) {
   if (inputs.empty()) throwInputError("merge: name at least one run folder to merge");
-  std::vector<nlohmann::json> records;
+  std::vector<Record> records;
   std::set<std::string> keys;
   nlohmann::json sources = nlohmann::json::array();
   std::set<std::string> renderers, hashes;
@@ -28,15 +29,15 @@ void mergeRuns(const std::vector<std::filesystem::path>& inputs, const std::file
       throwInputError("{}: not a canopy-bench run (needs metrics.jsonl and meta.json)",
                       input.string());
     }
-    const nlohmann::json meta = readJsonFile(metaPath.string());
-    if (title.empty()) title = meta.value("experiment", "merged");
-    renderers.insert(meta["gl"].value("renderer", "unknown"));
-    hashes.insert(meta.value("config_hash", ""));
-    sources.push_back({{"folder", input.string()}, {"meta", meta}});
+    const RunMeta meta = readRunMeta(input);
+    if (title.empty()) title = meta.experiment;
+    renderers.insert(meta.gl.renderer);
+    hashes.insert(meta.configHash ? *meta.configHash : "");
+    sources.push_back({{"folder", input.string()}, {"meta", readJsonFile(metaPath.string())}});
     size_t duplicates = 0;
-    for (nlohmann::json& record : ResultsStore::readRecords(metrics)) {
-      const std::string key = record.value("record_key", "");
-      if (key.empty()) throwInputError("{}: a record has no record_key", metrics.string());
+    for (Record& record : ResultsStore::readRecords(metrics)) {
+      const std::string& key = recordKeyOf(record);
+      if (key.empty()) throwInputError("{}: a record has an empty record_key", metrics.string());
       if (!keys.insert(key).second) {
         ++duplicates;
         continue;
@@ -53,7 +54,7 @@ void mergeRuns(const std::vector<std::filesystem::path>& inputs, const std::file
   if (renderers.size() > 1) spdlog::warn("merge: the runs used different renderers: {}", renderer);
   std::filesystem::create_directories(out);
   std::string lines;
-  for (const nlohmann::json& record : records) lines += record.dump() + "\n";
+  for (const Record& record : records) lines += recordToJson(record).dump() + "\n";
   writeTextAtomically(out / "metrics.jsonl", lines);
   writeSummaries(out, records, title, renderer);
   writeTextAtomically(out / "meta.json", nlohmann::json({{"experiment", title},

@@ -21,23 +21,19 @@ void runPopping(RunContext& run, TreeSession& session, const VariantRun& v, Meth
     const std::vector<ImageRgba8> frames =
         renderPath(run.harness, method, path, popping.width, popping.height, signatures);
     const TemporalMetrics metrics = temporalMetrics(frames, reference, signatures);
-    std::vector<float> distances;
-    for (const PathFrame& frame : path) distances.push_back(frame.distance);
-    nlohmann::json record = v.common;
-    record.update({{"kind", "popping"},
-                   {"params", v.params},
-                   {"path", pathName},
-                   {"resolution", {popping.width, popping.height}},
-                   {"distance", distances},
-                   {"psnr_frame", metrics.psnr},
-                   {"change", metrics.change},
-                   {"reference_change", metrics.referenceChange},
-                   {"temporal_excess", metrics.excess},
-                   {"lod_switch", metrics.lodSwitch},
-                   {"peak_excess", metrics.peakExcess},
-                   {"mean_excess", metrics.meanExcess},
-                   {"switches", metrics.switches}});
-    run.store.append(record, v.prefix + "popping|" + pathName);
+    PoppingRecord record = v.record<PoppingRecord>();
+    record.path = pathName;
+    record.resolution = {popping.width, popping.height};
+    for (const PathFrame& frame : path) record.distance.push_back(frame.distance);
+    record.psnrFrame = metrics.psnr;
+    record.change = metrics.change;
+    record.referenceChange = metrics.referenceChange;
+    record.temporalExcess = metrics.excess;
+    record.lodSwitch = metrics.lodSwitch;
+    record.peakExcess = metrics.peakExcess;
+    record.meanExcess = metrics.meanExcess;
+    record.switches = metrics.switches;
+    run.store.append(std::move(record), v.prefix + "popping|" + pathName);
     spdlog::info(
         "{} on {}: popping along the {}: peak {:.2f}, mean {:.2f} (8-bit RMS), {} LoD switches",
         v.variant.label, session.label(), pathName, metrics.peakExcess, metrics.meanExcess,

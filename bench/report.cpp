@@ -7,10 +7,13 @@
 
 #include <fmt/format.h>
 
+#include "bench/run_names.h"
 #include "common/atomic_file.h"
 
 namespace canopy {
 namespace {
+
+const double kNan = std::nan("");
 
 struct Mean {
   double sum = 0;
@@ -21,7 +24,7 @@ struct Mean {
       ++count;
     }
   }
-  double value() const { return count ? sum / count : std::nan(""); }
+  double value() const { return count ? sum / count : kNan; }
 };
 
 std::string csvField(const std::string& text) {
@@ -35,8 +38,8 @@ std::string number(double value, int decimals) {
   return std::isfinite(value) ? fmt::format("{:.{}f}", value, decimals) : "";
 }
 
-double mb(const nlohmann::json& bytes) {
-  return bytes.is_number() ? bytes.get<double>() / 1e6 : std::nan("");
+double mb(double bytes) {
+  return bytes / 1e6;
 }
 
 template <typename Rows, typename Get>
@@ -47,54 +50,86 @@ std::vector<double> collectKeys(const Rows& rows, Get get) {
   return {keys.begin(), keys.end()};
 }
 
+std::vector<double> distancesOf(const std::vector<SummaryRow>& rows) {
+  return collectKeys(rows, [](const SummaryRow& r) { return r.psnrByDistance; });
+}
+
+std::vector<double> elevationsOf(const std::vector<SummaryRow>& rows) {
+  return collectKeys(rows, [](const SummaryRow& r) { return r.psnrByElevation; });
+}
+
 double lookup(const std::vector<std::pair<double, double>>& pairs, double key) {
   for (const auto& [k, v] : pairs)
     if (k == key) return v;
-  return std::nan("");
+  return kNan;
 }
 
-const nlohmann::json* forestOfSize(const SummaryRow& row, int size) {
-  for (const nlohmann::json& f : row.forests)
-    if (f.value("trees", 0) == size) return &f;
+const ForestRecord* forestOfSize(const SummaryRow& row, int size) {
+  for (const ForestRecord& f : row.forests)
+    if (f.trees == size) return &f;
   return nullptr;
 }
 
 std::vector<int> forestSizes(const std::vector<SummaryRow>& rows) {
   std::set<int> sizes;
   for (const SummaryRow& row : rows)
-    for (const auto& f : row.forests) sizes.insert(f.value("trees", 0));
+    for (const ForestRecord& f : row.forests) sizes.insert(f.trees);
   return {sizes.begin(), sizes.end()};
 }
 
-double jsonNumber(const nlohmann::json* record, const char* key) {
-  if (!record || !record->contains(key) || !(*record)[key].is_number()) return std::nan("");
-  return (*record)[key].get<double>();
+const PoppingRecord* poppingOf(const SummaryRow& row, const std::string& path) {
+  for (const PoppingRecord& p : row.popping)
+    if (p.path == path) return &p;
+  return nullptr;
+}
+
+std::vector<std::string> poppingPaths(const std::vector<SummaryRow>& rows) {
+  std::set<std::string> paths;
+  for (const SummaryRow& row : rows)
+    for (const PoppingRecord& p : row.popping) paths.insert(p.path);
+  return {paths.begin(), paths.end()};
+}
+
+const BudgetRecord* budgetOf(const SummaryRow& row) {
+  return row.bake && row.bake->budget ? &*row.bake->budget : nullptr;
+}
+
+bool anyCloseupIn(const std::vector<SummaryRow>& rows) {
+  for (const SummaryRow& row : rows)
+    if (row.closeupViews > 0) return true;
+  return false;
+}
+
+// Fields of a row's bake record as numbers, NaN without one.
+double bakeSeconds(const SummaryRow& row) {
+  return row.bake ? row.bake->bakeSeconds : kNan;
+}
+double memoryMb(const SummaryRow& row) {
+  return row.bake ? mb(double(row.bake->memory.total)) : kNan;
+}
+double diskMb(const SummaryRow& row) {
+  return row.bake && row.bake->diskBytes ? mb(double(*row.bake->diskBytes)) : kNan;
 }
 
 // A forest record's fragment-shader invocations per pixel of its frame.
-double forestFragmentsPerPixel(const nlohmann::json* forest) {
-  if (!forest || !forest->contains("drawn") || !forest->contains("resolution")) return std::nan("");
-  const double w = (*forest)["resolution"][0], h = (*forest)["resolution"][1];
-  return jsonNumber(&(*forest)["drawn"], "fragments") / (w * h);
+double forestFragmentsPerPixel(const ForestRecord* forest) {
+  if (!forest) return kNan;
+  return double(forest->drawn.fragments) / (double(forest->resolution[0]) * forest->resolution[1]);
 }
 
-double forestLeafFraction(const nlohmann::json* forest) {
-  return forest && forest->contains("drawn")
-             ? jsonNumber(&(*forest)["drawn"], "leaf_geometry_fraction")
-             : std::nan("");
+double forestLeafFraction(const ForestRecord* forest) {
+  return forest ? forest->drawn.leafGeometryFraction : kNan;
 }
 
 // The interquartile range of a forest's per-block speedups: (q25, q75).
-std::pair<double, double> speedupSpread(const nlohmann::json* forest) {
-  if (!forest || !forest->contains("speedup_spread") || !(*forest)["speedup_spread"].is_array())
-    return {std::nan(""), std::nan("")};
-  const nlohmann::json& spread = (*forest)["speedup_spread"];
-  return {spread[0].get<double>(), spread[1].get<double>()};
+std::pair<double, double> speedupSpread(const ForestRecord* forest) {
+  if (!forest || !forest->speedupSpread) return {kNan, kNan};
+  return {(*forest->speedupSpread)[0], (*forest->speedupSpread)[1]};
 }
 
 // "2.95× [2.80–3.10]": a speedup with its interquartile range, "–" without one.
-std::string speedupText(const nlohmann::json* forest) {
-  const double speedup = jsonNumber(forest, "speedup_vs_polygonal");
+std::string speedupText(const ForestRecord* forest) {
+  const double speedup = forest ? forest->speedupVsPolygonal : kNan;
   if (!std::isfinite(speedup)) return "–";
   const auto [q25, q75] = speedupSpread(forest);
   std::string text = number(speedup, 2) + "×";
@@ -114,130 +149,112 @@ std::string markdownHeader(const std::vector<std::string>& textColumns,
 template <typename T>
 std::vector<std::string> labels(const std::vector<T>& keys, const char* format) {
   std::vector<std::string> result;
+  result.reserve(keys.size());
   for (const T& key : keys) result.push_back(fmt::format(fmt::runtime(format), key));
   return result;
 }
 
+// The per-row sums summarize() turns into means.
+struct Accumulator {
+  Mean psnr, psnrFrame, ssim, coverage, flip, psnrCloseup, flipCloseup, ssimCloseup;
+  Mean primitives, fragmentsPerPixel, leafFraction;
+  std::map<double, Mean> byDistance, byElevation;
+};
+
+void addView(SummaryRow& row, Accumulator& acc, const ViewRecord& view) {
+  if (view.ring == "closeup") {
+    acc.psnrCloseup.add(view.psnr);
+    acc.flipCloseup.add(view.flip);
+    acc.ssimCloseup.add(view.ssim);
+    ++row.closeupViews;
+    return;
+  }
+  acc.psnr.add(view.psnr);
+  acc.psnrFrame.add(view.psnrFrame);
+  acc.ssim.add(view.ssim);
+  acc.coverage.add(view.coverageError);
+  acc.flip.add(view.flip);
+  const double s = view.supersample, pixels = double(view.resolution[0]) * view.resolution[1];
+  acc.primitives.add(double(view.drawn.primitives));
+  acc.fragmentsPerPixel.add(double(view.drawn.fragments) / (s * s * pixels));
+  acc.leafFraction.add(view.drawn.leafGeometryFraction);
+  acc.byDistance[view.distance].add(view.psnr);
+  // Capture views have no elevation (the capture's up axis is its own).
+  if (view.elevation) acc.byElevation[*view.elevation].add(view.psnr);
+  ++row.views;
+}
+
+void finishRow(SummaryRow& row, const Accumulator& acc) {
+  row.psnr = acc.psnr.value();
+  row.psnrFrame = acc.psnrFrame.value();
+  row.ssim = acc.ssim.value();
+  row.coverageError = acc.coverage.value();
+  row.flip = acc.flip.value();
+  row.psnrCloseup = acc.psnrCloseup.value();
+  row.flipCloseup = acc.flipCloseup.value();
+  row.ssimCloseup = acc.ssimCloseup.value();
+  row.primitives = acc.primitives.value();
+  row.fragmentsPerPixel = acc.fragmentsPerPixel.value();
+  row.leafGeometryFraction = acc.leafFraction.value();
+  for (const auto& [d, m] : acc.byDistance) row.psnrByDistance.emplace_back(d, m.value());
+  for (const auto& [e, m] : acc.byElevation) row.psnrByElevation.emplace_back(e, m.value());
+  std::sort(row.forests.begin(), row.forests.end(),
+            [](const ForestRecord& a, const ForestRecord& b) { return a.trees < b.trees; });
+}
+
+// The record's effective parameters, for the kinds that carry them.
+nlohmann::json paramsOf(const Record& record) {
+  return std::visit(
+      [](const auto& r) -> nlohmann::json {
+        if constexpr (requires { r.params; })
+          return r.params;
+        else
+          return nlohmann::json::object();
+      },
+      record);
+}
+
 }  // namespace
 
-std::vector<SummaryRow> summarize(const std::vector<nlohmann::json>& records) {
+std::vector<SummaryRow> summarize(const std::vector<Record>& records) {
   std::vector<SummaryRow> rows;
-  std::map<std::pair<std::string, std::string>, size_t> index;
-  struct Accumulator {
-    Mean psnr, psnrFrame, ssim, coverage, flip, psnrCloseup, flipCloseup, ssimCloseup;
-    Mean primitives, fragmentsPerPixel, leafFraction;
-    std::map<double, Mean> byDistance, byElevation;
-  };
   std::vector<Accumulator> accumulators;
-  for (const nlohmann::json& record : records) {
-    const std::string kind = record.value("kind", "");
-    if (kind == "tree") continue;
-    const std::string tree = record.value("tree", ""),
-                      variant = record.value("variant", record.value("method", ""));
-    auto [it, inserted] = index.try_emplace({tree, variant}, rows.size());
+  std::map<std::pair<std::string, std::string>, size_t> index;
+  for (const Record& record : records) {
+    if (recordAs<TreeRecord>(record)) continue;
+    const VariantFields names = variantOf(record);
+    auto [it, inserted] = index.try_emplace({names.tree, names.variant}, rows.size());
     if (inserted) {
-      SummaryRow row;
-      row.tree = tree;
-      row.method = record.value("method", "");
-      row.variant = variant;
-      row.params = record.value("params", nlohmann::json::object());
-      rows.push_back(std::move(row));
+      rows.push_back({names.tree, names.method, names.variant, paramsOf(record)});
       accumulators.emplace_back();
     }
     SummaryRow& row = rows[it->second];
-    Accumulator& acc = accumulators[it->second];
-    if (kind == "bake") {
-      row.bake = record;
-      row.params = record.value("params", row.params);
-    } else if (kind == "view") {
-      const double psnr = record.value("psnr", std::nan(""));
-      if (record.value("ring", "orbit") == "closeup") {
-        acc.psnrCloseup.add(psnr);
-        acc.flipCloseup.add(jsonNumber(&record, "flip"));
-        acc.ssimCloseup.add(jsonNumber(&record, "ssim"));
-        ++row.closeupViews;
-        continue;
-      }
-      acc.psnr.add(psnr);
-      acc.psnrFrame.add(record.value("psnr_frame", std::nan("")));
-      acc.ssim.add(record.value("ssim", std::nan("")));
-      acc.coverage.add(record.value("coverage_error", std::nan("")));
-      acc.flip.add(jsonNumber(&record, "flip"));
-      if (record.contains("drawn") && record.contains("resolution")) {
-        const nlohmann::json& drawn = record["drawn"];
-        const double s = record.value("supersample", 1.0), w = record["resolution"][0],
-                     h = record["resolution"][1];
-        acc.primitives.add(jsonNumber(&drawn, "primitives"));
-        acc.fragmentsPerPixel.add(jsonNumber(&drawn, "fragments") / (s * s * w * h));
-        acc.leafFraction.add(jsonNumber(&drawn, "leaf_geometry_fraction"));
-      }
-      acc.byDistance[record.value("distance", 0.0)].add(psnr);
-      // Capture views have no elevation (the capture's up axis is its own).
-      if (record.contains("elevation"))
-        acc.byElevation[record["elevation"].get<double>()].add(psnr);
-      ++row.views;
-    } else if (kind == "forest") {
-      row.forests.push_back(record);
-    } else if (kind == "popping") {
-      row.popping.push_back(record);
-    } else if (kind == "skip") {
-      row.skipped = record.value("reason", "skipped");
+    if (const auto* bake = recordAs<BakeRecord>(record)) {
+      row.bake = *bake;
+      row.params = bake->params;
+    } else if (const auto* view = recordAs<ViewRecord>(record)) {
+      addView(row, accumulators[it->second], *view);
+    } else if (const auto* forest = recordAs<ForestRecord>(record)) {
+      row.forests.push_back(*forest);
+    } else if (const auto* popping = recordAs<PoppingRecord>(record)) {
+      row.popping.push_back(*popping);
+    } else if (const auto* skip = recordAs<SkipRecord>(record)) {
+      row.skipped = skip->reason;
     }
   }
-  for (size_t i = 0; i < rows.size(); ++i) {
-    const Accumulator& acc = accumulators[i];
-    rows[i].psnr = acc.psnr.value();
-    rows[i].psnrFrame = acc.psnrFrame.value();
-    rows[i].ssim = acc.ssim.value();
-    rows[i].coverageError = acc.coverage.value();
-    rows[i].flip = acc.flip.value();
-    rows[i].psnrCloseup = acc.psnrCloseup.value();
-    rows[i].flipCloseup = acc.flipCloseup.value();
-    rows[i].ssimCloseup = acc.ssimCloseup.value();
-    rows[i].primitives = acc.primitives.value();
-    rows[i].fragmentsPerPixel = acc.fragmentsPerPixel.value();
-    rows[i].leafGeometryFraction = acc.leafFraction.value();
-    for (const auto& [d, m] : acc.byDistance) rows[i].psnrByDistance.emplace_back(d, m.value());
-    for (const auto& [e, m] : acc.byElevation) rows[i].psnrByElevation.emplace_back(e, m.value());
-    std::sort(rows[i].forests.begin(), rows[i].forests.end(), [](const auto& a, const auto& b) {
-      return a.value("trees", 0) < b.value("trees", 0);
-    });
-  }
+  for (size_t i = 0; i < rows.size(); ++i) finishRow(rows[i], accumulators[i]);
   return rows;
 }
-
-namespace {
-
-const nlohmann::json* poppingOf(const SummaryRow& row, const std::string& path) {
-  for (const nlohmann::json& p : row.popping)
-    if (p.value("path", "") == path) return &p;
-  return nullptr;
-}
-
-std::vector<std::string> poppingPaths(const std::vector<SummaryRow>& rows) {
-  std::set<std::string> paths;
-  for (const SummaryRow& row : rows)
-    for (const auto& p : row.popping) paths.insert(p.value("path", ""));
-  return {paths.begin(), paths.end()};
-}
-
-const nlohmann::json* budgetOf(const SummaryRow& row) {
-  return row.bake.is_object() && row.bake.contains("budget") ? &row.bake["budget"] : nullptr;
-}
-
-}  // namespace
 
 std::string formatPoppingCsv(const std::vector<SummaryRow>& rows) {
   std::string out;
   for (const SummaryRow& row : rows) {
-    for (const nlohmann::json& p : row.popping) {
-      const auto& distance = p.at("distance");
-      for (size_t i = 0; i < distance.size(); ++i) {
-        out += fmt::format(
-            "{},{},{},{},{},{},{},{},{},{}\n", csvField(row.tree), csvField(row.variant),
-            p.value("path", ""), i, distance[i].get<double>(), p.at("psnr_frame")[i].get<double>(),
-            p.at("change")[i].get<double>(), p.at("reference_change")[i].get<double>(),
-            p.at("temporal_excess")[i].get<double>(), p.at("lod_switch")[i].get<bool>() ? 1 : 0);
+    for (const PoppingRecord& p : row.popping) {
+      for (size_t i = 0; i < p.distance.size(); ++i) {
+        out += fmt::format("{},{},{},{},{},{},{},{},{},{}\n", csvField(row.tree),
+                           csvField(row.variant), p.path, i, p.distance[i], p.psnrFrame[i],
+                           p.change[i], p.referenceChange[i], p.temporalExcess[i],
+                           p.lodSwitch[i] ? 1 : 0);
       }
     }
   }
@@ -247,10 +264,10 @@ std::string formatPoppingCsv(const std::vector<SummaryRow>& rows) {
          out;
 }
 
-std::string formatSummaryCsv(const std::vector<SummaryRow>& rows) {
-  const auto distances = collectKeys(rows, [](const SummaryRow& r) { return r.psnrByDistance; });
-  const auto elevations = collectKeys(rows, [](const SummaryRow& r) { return r.psnrByElevation; });
-  const auto sizes = forestSizes(rows);
+namespace {
+
+std::string csvHeader(const std::vector<double>& distances, const std::vector<double>& elevations,
+                      const std::vector<int>& sizes, const std::vector<std::string>& paths) {
   std::string out =
       "tree,method,variant,params,bake_s,bake_peak_rss_mb,memory_texture_mb,memory_geometry_mb,"
       "memory_other_mb,memory_total_mb,disk_mb,views,psnr,psnr_frame,ssim,coverage_error,flip,"
@@ -265,210 +282,239 @@ std::string formatSummaryCsv(const std::vector<SummaryRow>& rows) {
         "forest_coverage_error_n{0},forest_fragments_per_pixel_n{0},"
         "forest_leaf_geometry_fraction_n{0}",
         n);
-  const auto paths = poppingPaths(rows);
   for (const std::string& path : paths)
     out += fmt::format(",popping_{0}_peak,popping_{0}_mean,popping_{0}_switches", path);
-  out += ",budget_parameter,budget_value,budget_reached,skipped\n";
+  return out + ",budget_parameter,budget_value,budget_reached,skipped\n";
+}
+
+// The row's bake, memory, quality and drawn fields, as formatSummaryCsv lays them out.
+std::string csvQuality(const SummaryRow& row) {
+  const std::optional<BakeRecord>& bake = row.bake;
+  std::string out = csvField(row.tree) + "," + csvField(row.method) + "," + csvField(row.variant) +
+                    "," + csvField(row.params.dump());
+  out += "," + number(bakeSeconds(row), 4);
+  out += "," + number(bake ? mb(double(bake->bakePeakRssBytes)) : kNan, 2);
+  for (const uint64_t bytes : {bake ? bake->memory.texture : 0, bake ? bake->memory.geometry : 0,
+                               bake ? bake->memory.other : 0, bake ? bake->memory.total : 0})
+    out += "," + number(bake ? mb(double(bytes)) : kNan, 4);
+  out += "," + number(diskMb(row), 4);
+  out += fmt::format(",{}", row.views);
+  out += "," + number(row.psnr, 3) + "," + number(row.psnrFrame, 3) + "," + number(row.ssim, 4) +
+         "," + number(row.coverageError, 5) + "," + number(row.flip, 4);
+  out += fmt::format(",{}", row.closeupViews) + "," + number(row.psnrCloseup, 3) + "," +
+         number(row.flipCloseup, 4) + "," + number(row.ssimCloseup, 4);
+  out += "," + number(row.primitives, 0) + "," + number(row.fragmentsPerPixel, 4) + "," +
+         number(row.leafGeometryFraction, 4);
+  return out;
+}
+
+std::string csvForest(const ForestRecord* f) {
+  const auto [q25, q75] = speedupSpread(f);
+  const auto field = [&](double ForestRecord::*member) { return f ? f->*member : kNan; };
+  return "," + number(field(&ForestRecord::frameMsMedian), 3) + "," +
+         number(field(&ForestRecord::frameMsP95), 3) + "," + number(field(&ForestRecord::fps), 3) +
+         "," + number(field(&ForestRecord::speedupVsPolygonal), 3) + "," + number(q25, 3) + "," +
+         number(q75, 3) + "," + number(field(&ForestRecord::psnr), 3) + "," +
+         number(field(&ForestRecord::flip), 4) + "," +
+         number(field(&ForestRecord::coverageError), 5) + "," +
+         number(forestFragmentsPerPixel(f), 4) + "," + number(forestLeafFraction(f), 4);
+}
+
+std::string csvPopping(const PoppingRecord* p) {
+  return "," + number(p ? p->peakExcess : kNan, 3) + "," + number(p ? p->meanExcess : kNan, 3) +
+         "," + number(p ? double(p->switches) : kNan, 0);
+}
+
+}  // namespace
+
+std::string formatSummaryCsv(const std::vector<SummaryRow>& rows) {
+  const auto distances = distancesOf(rows);
+  const auto elevations = elevationsOf(rows);
+  const auto sizes = forestSizes(rows);
+  const auto paths = poppingPaths(rows);
+  std::string out = csvHeader(distances, elevations, sizes, paths);
   for (const SummaryRow& row : rows) {
-    const nlohmann::json& bake = row.bake;
-    const nlohmann::json memory =
-        bake.is_object() ? bake.value("memory_bytes", nlohmann::json()) : nlohmann::json();
-    const auto memoryField = [&](const char* key) {
-      return memory.is_object() ? mb(memory[key]) : std::nan("");
-    };
-    out += csvField(row.tree) + "," + csvField(row.method) + "," + csvField(row.variant) + "," +
-           csvField(row.params.dump());
-    out += "," + number(jsonNumber(bake.is_object() ? &bake : nullptr, "bake_s"), 4);
-    out += "," + number(bake.is_object() ? mb(bake.value("bake_peak_rss_bytes", nlohmann::json()))
-                                         : std::nan(""),
-                        2);
-    for (const char* key : {"texture", "geometry", "other", "total"})
-      out += "," + number(memoryField(key), 4);
-    out +=
-        "," +
-        number(bake.is_object() ? mb(bake.value("disk_bytes", nlohmann::json())) : std::nan(""), 4);
-    out += fmt::format(",{}", row.views);
-    out += "," + number(row.psnr, 3) + "," + number(row.psnrFrame, 3) + "," + number(row.ssim, 4) +
-           "," + number(row.coverageError, 5) + "," + number(row.flip, 4);
-    out += fmt::format(",{}", row.closeupViews) + "," + number(row.psnrCloseup, 3) + "," +
-           number(row.flipCloseup, 4) + "," + number(row.ssimCloseup, 4);
-    out += "," + number(row.primitives, 0) + "," + number(row.fragmentsPerPixel, 4) + "," +
-           number(row.leafGeometryFraction, 4);
+    out += csvQuality(row);
     for (double d : distances) out += "," + number(lookup(row.psnrByDistance, d), 3);
     for (double e : elevations) out += "," + number(lookup(row.psnrByElevation, e), 3);
-    for (int n : sizes) {
-      const nlohmann::json* f = forestOfSize(row, n);
-      const auto [q25, q75] = speedupSpread(f);
-      out += "," + number(jsonNumber(f, "frame_ms_median"), 3) + "," +
-             number(jsonNumber(f, "frame_ms_p95"), 3) + "," + number(jsonNumber(f, "fps"), 3) +
-             "," + number(jsonNumber(f, "speedup_vs_polygonal"), 3) + "," + number(q25, 3) + "," +
-             number(q75, 3) + "," + number(jsonNumber(f, "psnr"), 3) + "," +
-             number(jsonNumber(f, "flip"), 4) + "," + number(jsonNumber(f, "coverage_error"), 5) +
-             "," + number(forestFragmentsPerPixel(f), 4) + "," + number(forestLeafFraction(f), 4);
-    }
-    for (const std::string& path : paths) {
-      const nlohmann::json* p = poppingOf(row, path);
-      out += "," + number(jsonNumber(p, "peak_excess"), 3) + "," +
-             number(jsonNumber(p, "mean_excess"), 3) + "," + number(jsonNumber(p, "switches"), 0);
-    }
-    const nlohmann::json* budget = budgetOf(row);
-    out += budget ? fmt::format(",{},{},{}", budget->value("parameter", ""),
-                                (*budget)["value"].dump(), budget->value("reached", false) ? 1 : 0)
+    for (int n : sizes) out += csvForest(forestOfSize(row, n));
+    for (const std::string& path : paths) out += csvPopping(poppingOf(row, path));
+    const BudgetRecord* budget = budgetOf(row);
+    out += budget ? fmt::format(",{},{},{}", budget->parameter, budget->value.dump(),
+                                budget->reached ? 1 : 0)
                   : ",,,";
     out += "," + csvField(row.skipped) + "\n";
   }
   return out;
 }
 
-std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std::string& title,
-                                  const std::string& renderer) {
-  const auto distances = collectKeys(rows, [](const SummaryRow& r) { return r.psnrByDistance; });
-  const auto elevations = collectKeys(rows, [](const SummaryRow& r) { return r.psnrByElevation; });
-  std::string out = fmt::format(
-      "# {}\n\nRenderer: `{}`. PSNR in dB over the union of coverage masks "
-      "(capped at 100 dB for identical images); memory from the GPU ledger.\n\n",
-      title, renderer);
-  bool anyCloseup = false;
-  for (const SummaryRow& row : rows) anyCloseup = anyCloseup || row.closeupViews > 0;
+namespace {
+
+std::string qualityTable(const std::vector<SummaryRow>& rows) {
+  const auto distances = distancesOf(rows);
+  const bool closeups = anyCloseupIn(rows);
   std::vector<std::string> quality = {"bake s", "memory MB", "disk MB",     "PSNR",
                                       "FLIP",   "SSIM",      "coverage err"};
   for (const std::string& label : labels(distances, "PSNR @{:g}r")) quality.push_back(label);
-  if (anyCloseup) {
-    quality.push_back("PSNR close-up");
-    quality.push_back("FLIP close-up");
+  if (closeups) {
+    quality.emplace_back("PSNR close-up");
+    quality.emplace_back("FLIP close-up");
   }
-  out +=
+  std::string out =
       "## Quality, memory and bake\n\nPSNR, FLIP, SSIM and coverage error are means over the "
       "orbit rings' views; the close-up ring (a narrow field of view, leaves tens of pixels "
       "wide) has its own columns.\n\n" +
       markdownHeader({"tree", "method"}, quality);
   for (const SummaryRow& row : rows) {
-    const nlohmann::json* bake = row.bake.is_object() ? &row.bake : nullptr;
-    const double memory =
-        bake ? mb((*bake)["memory_bytes"].value("total", nlohmann::json())) : std::nan("");
-    out +=
-        fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} | {} |", row.tree, row.variant,
-                    number(jsonNumber(bake, "bake_s"), 2), number(memory, 2),
-                    number(bake ? mb((*bake)["disk_bytes"]) : std::nan(""), 2), number(row.psnr, 2),
-                    number(row.flip, 3), number(row.ssim, 3), number(row.coverageError, 4));
+    out += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} | {} |", row.tree, row.variant,
+                       number(bakeSeconds(row), 2), number(memoryMb(row), 2),
+                       number(diskMb(row), 2), number(row.psnr, 2), number(row.flip, 3),
+                       number(row.ssim, 3), number(row.coverageError, 4));
     for (double d : distances) out += " " + number(lookup(row.psnrByDistance, d), 2) + " |";
-    if (anyCloseup)
+    if (closeups)
       out += " " + number(row.psnrCloseup, 2) + " | " + number(row.flipCloseup, 3) + " |";
     out += "\n";
   }
+  return out;
+}
+
+std::string drawnTable(const std::vector<SummaryRow>& rows) {
   const auto sizes = forestSizes(rows);
-  std::vector<std::string> drawnColumns = {"primitives / view", "fragments / px",
-                                           "leaf polygons %"};
+  std::vector<std::string> columns = {"primitives / view", "fragments / px", "leaf polygons %"};
   for (int n : sizes) {
-    drawnColumns.push_back(fmt::format("fragments / px, {} trees", n));
-    drawnColumns.push_back(fmt::format("leaf polygons %, {} trees", n));
+    columns.push_back(fmt::format("fragments / px, {} trees", n));
+    columns.push_back(fmt::format("leaf polygons %, {} trees", n));
   }
-  out +=
+  std::string out =
       "\n## What was drawn\n\nGL query counts of the orbit views (fragment-shader "
       "invocations per output pixel, supersampling divided out) and of the forests' scored "
       "frames; leaf polygons: the share of the tree's leaves drawn as leaf polygons (100 % for "
       "the reference, 0 % for a pure impostor).\n\n" +
-      markdownHeader({"tree", "method"}, drawnColumns);
+      markdownHeader({"tree", "method"}, columns);
   for (const SummaryRow& row : rows) {
     out +=
         fmt::format("| {} | {} | {} | {} | {} |", row.tree, row.variant, number(row.primitives, 0),
                     number(row.fragmentsPerPixel, 2), number(100.0 * row.leafGeometryFraction, 1));
     for (int n : sizes) {
-      const nlohmann::json* f = forestOfSize(row, n);
+      const ForestRecord* f = forestOfSize(row, n);
       out += " " + number(forestFragmentsPerPixel(f), 2) + " | " +
              number(100.0 * forestLeafFraction(f), 1) + " |";
     }
     out += "\n";
   }
+  return out;
+}
+
+std::string poppingTable(const std::vector<SummaryRow>& rows) {
   const auto paths = poppingPaths(rows);
-  if (!paths.empty()) {
-    std::vector<std::string> columns;
+  if (paths.empty()) return "";
+  std::vector<std::string> columns;
+  for (const std::string& path : paths) {
+    columns.push_back(path + " peak");
+    columns.push_back(path + " mean");
+    columns.push_back(path + " LoD switches");
+  }
+  std::string out = "\n## Popping (temporal error in excess of the reference's, 8-bit RMS)\n\n" +
+                    markdownHeader({"tree", "method"}, columns);
+  for (const SummaryRow& row : rows) {
+    if (row.popping.empty()) continue;
+    out += fmt::format("| {} | {} |", row.tree, row.variant);
     for (const std::string& path : paths) {
-      columns.push_back(path + " peak");
-      columns.push_back(path + " mean");
-      columns.push_back(path + " LoD switches");
+      const PoppingRecord* p = poppingOf(row, path);
+      out += " " + number(p ? p->peakExcess : kNan, 2) + " | " +
+             number(p ? p->meanExcess : kNan, 2) + " | " +
+             number(p ? double(p->switches) : kNan, 0) + " |";
     }
-    out += "\n## Popping (temporal error in excess of the reference's, 8-bit RMS)\n\n" +
-           markdownHeader({"tree", "method"}, columns);
-    for (const SummaryRow& row : rows) {
-      if (row.popping.empty()) continue;
-      out += fmt::format("| {} | {} |", row.tree, row.variant);
-      for (const std::string& path : paths) {
-        const nlohmann::json* p = poppingOf(row, path);
-        out += " " + number(jsonNumber(p, "peak_excess"), 2) + " | " +
-               number(jsonNumber(p, "mean_excess"), 2) + " | " +
-               number(jsonNumber(p, "switches"), 0) + " |";
-      }
-      out += "\n";
-    }
-  }
-  bool anyBudget = false;
-  for (const SummaryRow& row : rows) anyBudget = anyBudget || budgetOf(row);
-  if (anyBudget) {
-    out += "\n## Budget (each method's memory knob set by bisection)\n\n" +
-           markdownHeader({"tree", "method", "parameter", "reached"},
-                          {"value", "target", "memory MB", "PSNR", "bakes"});
-    for (const SummaryRow& row : rows) {
-      const nlohmann::json* b = budgetOf(row);
-      if (!b) continue;
-      const double memory = mb(row.bake["memory_bytes"].value("total", nlohmann::json()));
-      out +=
-          fmt::format("| {} | {} | {} | {} | {} | {} {} | {} | {} | {} |\n", row.tree, row.variant,
-                      b->value("parameter", ""), b->value("reached", false) ? "yes" : "no",
-                      (*b)["value"].dump(), number(jsonNumber(b, "target"), 2),
-                      b->value("mode", "") == "memory_mb" ? "MB" : "dB", number(memory, 2),
-                      number(row.psnr, 2), number(jsonNumber(b, "steps"), 0));
-    }
-  }
-  bool anySkipped = false;
-  for (const SummaryRow& row : rows) anySkipped = anySkipped || !row.skipped.empty();
-  if (anySkipped) {
-    out += "\nSkipped: ";
-    for (const SummaryRow& row : rows)
-      if (!row.skipped.empty())
-        out += fmt::format("{} on {} ({}); ", row.variant, row.tree, row.skipped);
     out += "\n";
   }
-  if (!elevations.empty()) {
-    out += "\n## PSNR by elevation\n\n" +
-           markdownHeader({"tree", "method"}, labels(elevations, "{:g}°"));
-    for (const SummaryRow& row : rows) {
-      out += fmt::format("| {} | {} |", row.tree, row.variant);
-      for (double e : elevations) out += " " + number(lookup(row.psnrByElevation, e), 2) + " |";
-      out += "\n";
-    }
-  }
-  if (!sizes.empty()) {
-    out +=
-        "\n## Frame time by forest size\n\nMedian ms / FPS / speedup vs polygonal: the median "
-        "of per-block ratios with their interquartile range, blocks of reference and method "
-        "frames timed in turn on the same cameras in the same run.\n\n" +
-        markdownHeader({"tree", "method"}, labels(sizes, "{} trees"));
-    for (const SummaryRow& row : rows) {
-      out += fmt::format("| {} | {} |", row.tree, row.variant);
-      for (int n : sizes) {
-        const nlohmann::json* f = forestOfSize(row, n);
-        out += f ? fmt::format(" {} / {} / {} |", number(jsonNumber(f, "frame_ms_median"), 1),
-                               number(jsonNumber(f, "fps"), 1), speedupText(f))
-                 : " |";
-      }
-      out += "\n";
-    }
-    out += "\n## Forest frames against the reference's (PSNR over the frame / FLIP)\n\n" +
-           markdownHeader({"tree", "method"}, labels(sizes, "{} trees"));
-    for (const SummaryRow& row : rows) {
-      out += fmt::format("| {} | {} |", row.tree, row.variant);
-      for (int n : sizes) {
-        const nlohmann::json* f = forestOfSize(row, n);
-        out += f && std::isfinite(jsonNumber(f, "flip"))
-                   ? fmt::format(" {} / {} |", number(jsonNumber(f, "psnr"), 2),
-                                 number(jsonNumber(f, "flip"), 3))
-                   : " |";
-      }
-      out += "\n";
-    }
+  return out;
+}
+
+std::string budgetTable(const std::vector<SummaryRow>& rows) {
+  bool anyBudget = false;
+  for (const SummaryRow& row : rows) anyBudget = anyBudget || budgetOf(row);
+  if (!anyBudget) return "";
+  std::string out = "\n## Budget (each method's memory knob set by bisection)\n\n" +
+                    markdownHeader({"tree", "method", "parameter", "reached"},
+                                   {"value", "target", "memory MB", "PSNR", "bakes"});
+  for (const SummaryRow& row : rows) {
+    const BudgetRecord* b = budgetOf(row);
+    if (!b) continue;
+    out += fmt::format("| {} | {} | {} | {} | {} | {} {} | {} | {} | {} |\n", row.tree, row.variant,
+                       b->parameter, b->reached ? "yes" : "no", b->value.dump(),
+                       number(b->target, 2), b->mode == "memory_mb" ? "MB" : "dB",
+                       number(memoryMb(row), 2), number(row.psnr, 2), number(double(b->steps), 0));
   }
   return out;
+}
+
+std::string skippedLine(const std::vector<SummaryRow>& rows) {
+  std::string out;
+  for (const SummaryRow& row : rows)
+    if (!row.skipped.empty())
+      out += fmt::format("{} on {} ({}); ", row.variant, row.tree, row.skipped);
+  return out.empty() ? "" : "\nSkipped: " + out + "\n";
+}
+
+std::string elevationTable(const std::vector<SummaryRow>& rows) {
+  const auto elevations = elevationsOf(rows);
+  if (elevations.empty()) return "";
+  std::string out = "\n## PSNR by elevation\n\n" +
+                    markdownHeader({"tree", "method"}, labels(elevations, "{:g}°"));
+  for (const SummaryRow& row : rows) {
+    out += fmt::format("| {} | {} |", row.tree, row.variant);
+    for (double e : elevations) out += " " + number(lookup(row.psnrByElevation, e), 2) + " |";
+    out += "\n";
+  }
+  return out;
+}
+
+// One table with a cell per forest size, `cell` giving its text (for a present record).
+template <typename Cell>
+std::string forestTable(const std::vector<SummaryRow>& rows, const std::string& heading,
+                        Cell cell) {
+  const auto sizes = forestSizes(rows);
+  std::string out = heading + markdownHeader({"tree", "method"}, labels(sizes, "{} trees"));
+  for (const SummaryRow& row : rows) {
+    out += fmt::format("| {} | {} |", row.tree, row.variant);
+    for (int n : sizes) out += cell(forestOfSize(row, n));
+    out += "\n";
+  }
+  return out;
+}
+
+std::string forestTables(const std::vector<SummaryRow>& rows) {
+  if (forestSizes(rows).empty()) return "";
+  std::string out = forestTable(
+      rows,
+      "\n## Frame time by forest size\n\nMedian ms / FPS / speedup vs polygonal: the median "
+      "of per-block ratios with their interquartile range, blocks of reference and method "
+      "frames timed in turn on the same cameras in the same run.\n\n",
+      [](const ForestRecord* f) {
+        return f ? fmt::format(" {} / {} / {} |", number(f->frameMsMedian, 1), number(f->fps, 1),
+                               speedupText(f))
+                 : std::string(" |");
+      });
+  out += forestTable(
+      rows, "\n## Forest frames against the reference's (PSNR over the frame / FLIP)\n\n",
+      [](const ForestRecord* f) {
+        return f && std::isfinite(f->flip)
+                   ? fmt::format(" {} / {} |", number(f->psnr, 2), number(f->flip, 3))
+                   : std::string(" |");
+      });
+  return out;
+}
+
+}  // namespace
+
+std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std::string& title,
+                                  const std::string& renderer) {
+  std::string out = fmt::format(
+      "# {}\n\nRenderer: `{}`. PSNR in dB over the union of coverage masks "
+      "(capped at 100 dB for identical images); memory from the GPU ledger.\n\n",
+      title, renderer);
+  return out + qualityTable(rows) + drawnTable(rows) + poppingTable(rows) + budgetTable(rows) +
+         skippedLine(rows) + elevationTable(rows) + forestTables(rows);
 }
 
 namespace {
@@ -507,32 +553,30 @@ std::string latexEscape(const std::string& text) {
 
 std::string formatSummaryLatex(const std::vector<SummaryRow>& rows, const std::string& title,
                                const std::string& renderer) {
-  const auto distances = collectKeys(rows, [](const SummaryRow& r) { return r.psnrByDistance; });
+  const auto distances = distancesOf(rows);
   const auto sizes = forestSizes(rows);
-  bool anyCloseup = false;
-  for (const SummaryRow& row : rows) anyCloseup = anyCloseup || row.closeupViews > 0;
-  const size_t numbers = 2 + distances.size() + (anyCloseup ? 1 : 0) + 3 + sizes.size();
+  const bool closeups = anyCloseupIn(rows);
+  const size_t numbers = 2 + distances.size() + (closeups ? 1 : 0) + 3 + sizes.size();
   std::string out = "% Generated by canopy-bench; needs \\usepackage{booktabs}.\n";
   out += "\\begin{table}\n\\centering\n\\small\n\\begin{tabular}{ll" + std::string(numbers, 'r') +
          "}\n\\toprule\n";
   out += "Tree & Method & Bake (s) & Memory (MB)";
   for (double d : distances) out += fmt::format(" & PSNR@{:g}r", d);
-  if (anyCloseup) out += " & PSNR close-up";
+  if (closeups) out += " & PSNR close-up";
   out += " & SSIM & FLIP & Cov.\\ err.";
   for (int n : sizes) out += fmt::format(" & Speedup@{}", n);
   out += " \\\\\n\\midrule\n";
   for (const SummaryRow& row : rows) {
-    const nlohmann::json* bake = row.bake.is_object() ? &row.bake : nullptr;
-    const double memory =
-        bake ? mb((*bake)["memory_bytes"].value("total", nlohmann::json())) : std::nan("");
     out += latexEscape(row.tree) + " & " + latexEscape(row.variant) + " & " +
-           number(jsonNumber(bake, "bake_s"), 2) + " & " + number(memory, 2);
+           number(bakeSeconds(row), 2) + " & " + number(memoryMb(row), 2);
     for (double d : distances) out += " & " + number(lookup(row.psnrByDistance, d), 2);
-    if (anyCloseup) out += " & " + number(row.psnrCloseup, 2);
+    if (closeups) out += " & " + number(row.psnrCloseup, 2);
     out += " & " + number(row.ssim, 3) + " & " + number(row.flip, 3) + " & " +
            number(row.coverageError, 3);
-    for (int n : sizes)
-      out += " & " + number(jsonNumber(forestOfSize(row, n), "speedup_vs_polygonal"), 2);
+    for (int n : sizes) {
+      const ForestRecord* f = forestOfSize(row, n);
+      out += " & " + number(f ? f->speedupVsPolygonal : kNan, 2);
+    }
     out += " \\\\\n";
   }
   out += "\\bottomrule\n\\end{tabular}\n";
@@ -544,65 +588,80 @@ std::string formatSummaryLatex(const std::vector<SummaryRow>& rows, const std::s
   return out;
 }
 
+namespace {
+
+// The main table's header: which columns this tree's rows fill.
+struct MainColumns {
+  std::vector<double> distances;
+  int largest = 0;  // the largest forest, 0 without forests
+  bool closeups = false, popping = false;
+};
+
+MainColumns mainColumns(const std::vector<SummaryRow>& rows) {
+  MainColumns c;
+  c.distances = distancesOf(rows);
+  const auto sizes = forestSizes(rows);
+  c.largest = sizes.empty() ? 0 : sizes.back();
+  c.closeups = anyCloseupIn(rows);
+  for (const SummaryRow& row : rows) c.popping = c.popping || poppingOf(row, "dolly");
+  return c;
+}
+
+std::string mainRow(const SummaryRow& row, const MainColumns& c) {
+  std::string byRing;
+  for (double d : c.distances)
+    byRing += (byRing.empty() ? "" : " / ") + number(lookup(row.psnrByDistance, d), 1);
+  std::string out =
+      fmt::format("| `{}` | {} | {} | {} | {} | {} |", row.variant, number(memoryMb(row), 2),
+                  number(bakeSeconds(row), 2), number(row.psnr, 2), number(row.flip, 3), byRing);
+  if (c.closeups)
+    out += " " + number(row.psnrCloseup, 1) + " / " + number(row.flipCloseup, 3) + " |";
+  out += " " + number(100.0 * row.leafGeometryFraction, 0) + " % |";
+  if (c.largest > 0) {
+    const ForestRecord* f = forestOfSize(row, c.largest);
+    out += " " + speedupText(f) + " | " + number(f ? f->flip : kNan, 3) + " |";
+  }
+  if (c.popping) {
+    const PoppingRecord* p = poppingOf(row, "dolly");
+    out += " " + number(p ? p->peakExcess : kNan, 2) + " |";
+  }
+  return out + "\n";
+}
+
+}  // namespace
+
 std::string formatMainTable(const std::vector<SummaryRow>& rows, const std::string& renderer) {
   const std::string tree = rows.front().tree;
   std::vector<SummaryRow> subset;
   for (const SummaryRow& row : rows)
     if (row.tree == tree) subset.push_back(row);
-  const auto distances = collectKeys(subset, [](const SummaryRow& r) { return r.psnrByDistance; });
-  const auto sizes = forestSizes(subset);
-  const int largest = sizes.empty() ? 0 : sizes.back();
-  bool anyCloseup = false, anyPopping = false;
-  for (const SummaryRow& row : subset) {
-    anyCloseup = anyCloseup || row.closeupViews > 0;
-    anyPopping = anyPopping || poppingOf(row, "dolly");
-  }
+  const MainColumns c = mainColumns(subset);
   std::string rings;
-  for (double d : distances) rings += (rings.empty() ? "" : " / ") + fmt::format("{:g}r", d);
+  for (double d : c.distances) rings += (rings.empty() ? "" : " / ") + fmt::format("{:g}r", d);
   std::vector<std::string> columns = {"GPU memory (MB)", "bake (s)", "PSNR (dB)", "FLIP",
                                       "PSNR @" + rings};
-  if (anyCloseup) columns.push_back("close-up PSNR / FLIP");
-  columns.push_back("leaf polygons");
-  if (largest > 0) {
-    columns.push_back(fmt::format("speedup, {} trees [IQR]", largest));
-    columns.push_back(fmt::format("forest FLIP, {} trees", largest));
+  if (c.closeups) columns.emplace_back("close-up PSNR / FLIP");
+  columns.emplace_back("leaf polygons");
+  if (c.largest > 0) {
+    columns.push_back(fmt::format("speedup, {} trees [IQR]", c.largest));
+    columns.push_back(fmt::format("forest FLIP, {} trees", c.largest));
   }
-  if (anyPopping) columns.push_back("popping peak (dolly)");
+  if (c.popping) columns.emplace_back("popping peak (dolly)");
   std::string out =
       fmt::format("{} (renderer: {})\n\n", tree, renderer) + markdownHeader({"method"}, columns);
-  for (const SummaryRow& row : subset) {
-    const nlohmann::json* bake = row.bake.is_object() ? &row.bake : nullptr;
-    std::string byRing;
-    for (double d : distances)
-      byRing += (byRing.empty() ? "" : " / ") + number(lookup(row.psnrByDistance, d), 1);
-    out += fmt::format(
-        "| `{}` | {} | {} | {} | {} | {} |", row.variant,
-        number(bake ? mb((*bake)["memory_bytes"].value("total", nlohmann::json())) : std::nan(""),
-               2),
-        number(jsonNumber(bake, "bake_s"), 2), number(row.psnr, 2), number(row.flip, 3), byRing);
-    if (anyCloseup)
-      out += " " + number(row.psnrCloseup, 1) + " / " + number(row.flipCloseup, 3) + " |";
-    out += " " + number(100.0 * row.leafGeometryFraction, 0) + " % |";
-    if (largest > 0) {
-      const nlohmann::json* f = forestOfSize(row, largest);
-      out += " " + speedupText(f) + " | " + number(jsonNumber(f, "flip"), 3) + " |";
-    }
-    if (anyPopping)
-      out += " " + number(jsonNumber(poppingOf(row, "dolly"), "peak_excess"), 2) + " |";
-    out += "\n";
-  }
+  for (const SummaryRow& row : subset) out += mainRow(row, c);
   return out;
 }
 
-void writeSummaries(const std::filesystem::path& directory,
-                    const std::vector<nlohmann::json>& records, const std::string& title,
-                    const std::string& renderer) {
+void writeSummaries(const std::filesystem::path& directory, const std::vector<Record>& records,
+                    const std::string& title, const std::string& renderer) {
   const auto rows = summarize(records);
   writeTextAtomically(directory / "summary.csv", formatSummaryCsv(rows));
   writeTextAtomically(directory / "summary.md", formatSummaryMarkdown(rows, title, renderer));
   writeTextAtomically(directory / "summary.tex", formatSummaryLatex(rows, title, renderer));
   const std::string popping = formatPoppingCsv(rows);
   if (!popping.empty()) writeTextAtomically(directory / "popping.csv", popping);
+  writeRunNames(directory, rows);
 }
 
 }  // namespace canopy

@@ -1,10 +1,13 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "bench/records.h"
 
 namespace canopy {
 
@@ -13,8 +16,8 @@ struct SummaryRow {
   std::string tree;
   std::string method;
   std::string variant;
-  nlohmann::json params;  // effective
-  nlohmann::json bake;    // the kind:"bake" record (null when absent)
+  nlohmann::json params;           // effective
+  std::optional<BakeRecord> bake;  // absent when the run has none
   // Means over the views of the orbit rings (or a capture's test views); the close-up ring has
   // its own means below, as its narrow field of view makes it another measurement.
   double psnr = 0, psnrFrame = 0, ssim = 0, coverageError = 0, flip = 0;
@@ -26,34 +29,35 @@ struct SummaryRow {
   double primitives = 0, fragmentsPerPixel = 0, leafGeometryFraction = 0;
   std::vector<std::pair<double, double>> psnrByDistance;   // (distance, mean PSNR)
   std::vector<std::pair<double, double>> psnrByElevation;  // (elevation, mean PSNR)
-  std::vector<nlohmann::json> forests;                     // kind:"forest" records by size
-  std::vector<nlohmann::json> popping;                     // kind:"popping" records (dolly, orbit)
+  std::vector<ForestRecord> forests;                       // by size
+  std::vector<PoppingRecord> popping;                      // dolly, orbit
   std::string skipped;  // why the method did not run on this tree (kind:"skip"), else empty
 };
 
-std::vector<SummaryRow> summarize(const std::vector<nlohmann::json>& records);
+std::vector<SummaryRow> summarize(const std::vector<Record>& records);
 
 // One line per frame of every popping record: tree, variant, path, frame, distance, psnr,
 // change, reference_change, temporal_excess, lod_switch (0/1). Empty when there are none.
 std::string formatPoppingCsv(const std::vector<SummaryRow>& rows);
 
 std::string formatSummaryCsv(const std::vector<SummaryRow>& rows);
+std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std::string& title,
+                                  const std::string& renderer);
 
 // The README's main table for the first tree of the rows: memory, bake, quality on the orbit
 // rings and the close-ups, what was drawn, and speed at the largest forest (median and IQR of
 // interleaved per-block ratios) with its forest-frame FLIP.
 std::string formatMainTable(const std::vector<SummaryRow>& rows, const std::string& renderer);
-std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std::string& title,
-                                  const std::string& renderer);
 
 // A booktabs table for a paper: per tree and method, bake time, memory, PSNR by distance ring,
-// SSIM, coverage error and FPS by forest size. Text is escaped for LaTeX.
+// the close-up PSNR, SSIM, FLIP, coverage error and the speedup by forest size. Text is escaped
+// for LaTeX.
 std::string formatSummaryLatex(const std::vector<SummaryRow>& rows, const std::string& title,
                                const std::string& renderer);
 
-// Writes summary.csv, summary.md and summary.tex into `directory` atomically.
-void writeSummaries(const std::filesystem::path& directory,
-                    const std::vector<nlohmann::json>& records, const std::string& title,
-                    const std::string& renderer);
+// Writes summary.csv, summary.md and summary.tex (and popping.csv, names.json) into `directory`
+// atomically.
+void writeSummaries(const std::filesystem::path& directory, const std::vector<Record>& records,
+                    const std::string& title, const std::string& renderer);
 
 }  // namespace canopy

@@ -3,6 +3,7 @@
 #include <fstream>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include "common/atomic_file.h"
@@ -10,24 +11,27 @@
 
 namespace canopy {
 
-std::vector<nlohmann::json> ResultsStore::readRecords(const std::filesystem::path& path) {
-  std::vector<nlohmann::json> records;
+std::vector<Record> ResultsStore::readRecords(const std::filesystem::path& path) {
+  std::vector<Record> records;
   std::ifstream in(path, std::ios::binary);
   if (!in) return records;
   std::stringstream buffer;
   buffer << in.rdbuf();
   const std::string text = buffer.str();
-  size_t start = 0;
+  size_t start = 0, lineNumber = 0;
   for (size_t end = text.find('\n'); end != std::string::npos; end = text.find('\n', start)) {
     const std::string line = text.substr(start, end - start);
     start = end + 1;
+    ++lineNumber;
     if (line.empty()) continue;
+    const std::string where = fmt::format("{}:{}", path.string(), lineNumber);
+    nlohmann::json json;
     try {
-      records.push_back(nlohmann::json::parse(line));
+      json = nlohmann::json::parse(line);
     } catch (const nlohmann::json::parse_error& error) {
-      throwInputError("{}: line {} is not a JSON record ({})", path.string(), records.size() + 1,
-                      error.what());
+      throwInputError("{}: not a JSON record ({})", where, error.what());
     }
+    records.push_back(recordFromJson(json, where));
   }
   return records;
 }
@@ -49,22 +53,18 @@ ResultsStore::ResultsStore(std::filesystem::path directory) : mDirectory(std::mo
     }
   }
   mRecords = readRecords(path);
-  for (const nlohmann::json& record : mRecords) {
-    if (record.contains("record_key")) mKeys.insert(record["record_key"].get<std::string>());
-  }
+  for (size_t i = 0; i < mRecords.size(); ++i) mIndex.emplace(recordKeyOf(mRecords[i]), i);
 }
 
-const nlohmann::json* ResultsStore::find(const std::string& key) const {
-  if (!has(key)) return nullptr;
-  for (const nlohmann::json& record : mRecords)
-    if (record.value("record_key", "") == key) return &record;
-  return nullptr;
+const Record* ResultsStore::find(const std::string& key) const {
+  const auto it = mIndex.find(key);
+  return it == mIndex.end() ? nullptr : &mRecords[it->second];
 }
 
-void ResultsStore::append(nlohmann::json record, const std::string& key) {
-  record["record_key"] = key;
-  appendLineDurably(metricsPath(), record.dump());
-  mKeys.insert(key);
+void ResultsStore::append(Record record, const std::string& key) {
+  recordKeyOf(record) = key;
+  appendLineDurably(metricsPath(), recordToJson(record).dump());
+  mIndex.emplace(key, mRecords.size());
   mRecords.push_back(std::move(record));
 }
 

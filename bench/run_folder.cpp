@@ -7,25 +7,24 @@
 #include <cerrno>
 #include <cstring>
 #include <ctime>
-#include <fstream>
+#include <optional>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "bench/run_meta.h"
 #include "common/error.h"
 
 namespace canopy {
 namespace {
 
-// meta.json of an earlier run, or null when there is none or it cannot be read.
-nlohmann::json readMeta(const std::filesystem::path& directory) {
-  std::ifstream in(directory / "meta.json");
-  if (!in) return nullptr;
+// meta.json of an earlier run, or nothing when there is none or it cannot be read (then the
+// run is no run of this config and code).
+std::optional<RunMeta> readMeta(const std::filesystem::path& directory) {
   try {
-    nlohmann::json meta = nlohmann::json::parse(in);
-    return meta.is_object() ? meta : nlohmann::json();
-  } catch (const nlohmann::json::exception&) {
-    return nullptr;
+    return readRunMeta(directory);
+  } catch (const InputError&) {
+    return std::nullopt;
   }
 }
 
@@ -45,10 +44,8 @@ std::string utcStamp() {
   return buffer;
 }
 
-std::string metaString(const nlohmann::json& meta, const char* key) {
-  return meta.is_object() && meta.contains(key) && meta[key].is_string()
-             ? meta[key].get<std::string>()
-             : std::string("unknown");
+std::string orUnknown(const Absent<std::string>& value) {
+  return value ? *value : std::string("unknown");
 }
 
 }  // namespace
@@ -58,11 +55,11 @@ RunFolder::RunFolder(std::filesystem::path directory, const RunIdentity& identit
     : mDirectory(std::move(directory)) {
   lock();
   if (!holdsRecords(mDirectory)) return;
-  const nlohmann::json meta = readMeta(mDirectory);
-  const std::string hash = metaString(meta, "config_hash");
-  const std::string code = metaString(meta, "code_version");
+  const std::optional<RunMeta> meta = readMeta(mDirectory);
+  const std::string hash = meta ? orUnknown(meta->configHash) : "unknown";
+  const std::string code = meta ? orUnknown(meta->codeVersion) : "unknown";
   const bool same = hash == identity.configHash && code == identity.codeVersion;
-  const bool finished = meta.is_object() && meta.contains("finished");
+  const bool finished = meta && meta->finished;
   bool resume = false;
   switch (policy) {
     case ResumePolicy::kResume:
@@ -75,15 +72,14 @@ RunFolder::RunFolder(std::filesystem::path directory, const RunIdentity& identit
       break;
   }
   if (resume) {
-    if (meta.is_object() && meta.contains("runs") && meta["runs"].is_array())
-      mEarlierRuns = meta["runs"];
+    if (meta && meta->runs) mEarlierRuns = *meta->runs;
     return;
   }
   if (policy == ResumePolicy::kResume) {
     throwInputError(
         "{}: holds a run of {} (config {}, code {}), not of this config ({}) and code ({}); pass "
         "--fresh to move it aside and start anew",
-        mDirectory.string(), metaString(meta, "experiment"), hash, code, identity.configHash,
+        mDirectory.string(), meta ? meta->experiment : "unknown", hash, code, identity.configHash,
         identity.codeVersion);
   }
   // Move the earlier run aside, then hold the new, empty folder.

@@ -60,15 +60,15 @@ TreeSession openTree(RunContext& run, const TreeSpec& spec) {
                tree.leaves.size(), tree.wood.triangleCount(), loadSeconds);
   const std::string key = "tree|" + label;
   if (!run.store.has(key)) {
-    run.store.append({{"kind", "tree"},
-                      {"tree", label},
-                      {"source", spec.source()},
-                      {"leaves", tree.leaves.size()},
-                      {"wood_triangles", tree.wood.triangleCount()},
-                      {"branch_nodes", tree.branches.size()},
-                      {"bounding_radius", tree.boundingSphereRadius()},
-                      {"load_s", loadSeconds}},
-                     key);
+    TreeRecord record;
+    record.tree = label;
+    record.source = spec.source();
+    record.leaves = tree.leaves.size();
+    record.woodTriangles = tree.wood.triangleCount();
+    record.branchNodes = tree.branches.size();
+    record.boundingRadius = tree.boundingSphereRadius();
+    record.loadSeconds = loadSeconds;
+    run.store.append(std::move(record), key);
   }
   TreeSession session(std::move(tree), label, run.config, run.device, run.harness);
   if (run.options.saveImages) session.setImageFolder(run.options.outDirectory / "images");
@@ -81,14 +81,15 @@ TreeSession openTree(RunContext& run, const TreeSpec& spec) {
 BakedMethod bakeVariant(RunContext& run, TreeSession& session, VariantRun& v, bool bakePending) {
   const MethodInfo& info = builtinMethods().find(v.variant.method);
   MethodVariant effective = v.variant;
-  nlohmann::json budget;
+  Absent<BudgetRecord> budget;
   if (run.config.budget && info.traits.memoryKnob &&
       !v.variant.params.contains(info.traits.memoryKnob->parameter)) {
     // A resumed run takes the value its bake record already holds.
-    const nlohmann::json* done = run.store.find(v.prefix + "bake");
-    budget = done && done->contains("budget") ? (*done)["budget"]
-                                              : runBudget(run, session, v, *info.traits.memoryKnob);
-    effective.params[info.traits.memoryKnob->parameter] = budget["value"];
+    const Record* done = run.store.find(v.prefix + "bake");
+    const BakeRecord* doneBake = done ? recordAs<BakeRecord>(*done) : nullptr;
+    budget = doneBake && doneBake->budget ? *doneBake->budget
+                                          : runBudget(run, session, v, *info.traits.memoryKnob);
+    effective.params[info.traits.memoryKnob->parameter] = budget->value;
   }
   spdlog::info("{} on {}: baking", v.variant.label, session.label());
   // The asset (and its disk_bytes) matters only for the bake record; a resumed run that already
@@ -100,31 +101,27 @@ BakedMethod bakeVariant(RunContext& run, TreeSession& session, VariantRun& v, bo
   }
   BakedMethod baked =
       bakeMethod(effective, session.tree(), run.device, session.bakeContext(), asset);
-  v.params = baked.record["params"];
+  v.params = baked.record.params;
   spdlog::info("{} on {}: bake {:.2f} s, {:.2f} MB on the GPU", v.variant.label, session.label(),
-               baked.record["bake_s"].get<double>(),
-               baked.record["memory_bytes"]["total"].get<double>() / 1e6);
+               baked.record.bakeSeconds, double(baked.record.memory.total) / 1e6);
   if (bakePending) {
-    nlohmann::json record = v.common;
-    record.update(baked.record);
-    record["gl_renderer"] = run.renderer;
-    if (!budget.is_null()) record["budget"] = budget;
-    run.store.append(record, v.prefix + "bake");
+    BakeRecord record = baked.record;
+    record.tree = session.label();
+    record.glRenderer = run.renderer;
+    record.budget = budget;
+    run.store.append(std::move(record), v.prefix + "bake");
   }
   return baked;
 }
 
 void runVariant(RunContext& run, TreeSession& session, const MethodVariant& variant) {
-  VariantRun v{variant,
-               session.label() + "|" + variant.label + "|",
-               {{"tree", session.label()}, {"method", variant.method}, {"variant", variant.label}},
+  VariantRun v{variant, session.label(), session.label() + "|" + variant.label + "|",
                nlohmann::json::object()};
   if (!session.hasMesh() && builtinMethods().find(variant.method).traits.needsMesh) {
     if (!run.store.has(v.prefix + "skip")) {
-      nlohmann::json record = v.common;
-      record.update({{"kind", "skip"},
-                     {"reason", "needs a mesh; the tree is a capture folder (images only)"}});
-      run.store.append(record, v.prefix + "skip");
+      SkipRecord record = v.record<SkipRecord>();
+      record.reason = "needs a mesh; the tree is a capture folder (images only)";
+      run.store.append(std::move(record), v.prefix + "skip");
     }
     spdlog::info("{} on {}: skipped (needs a mesh; the tree is a capture)", variant.label,
                  session.label());

@@ -23,13 +23,23 @@ struct RunContext {
   std::string renderer;  // GL_RENDERER, in bake and forest records
 };
 
-// One method variant on one tree: the record keys it writes under and the fields every record
-// of it starts with.
+// One method variant on one tree: the record keys it writes under and what its records name.
 struct VariantRun {
   const MethodVariant& variant;
+  std::string tree;
   std::string prefix;     // "<tree>|<variant>|": record keys are prefix + what
-  nlohmann::json common;  // tree, method, variant
   nlohmann::json params;  // effective parameters (from the bake)
+
+  // A record of kind T with the tree, method, variant and parameters filled in.
+  template <typename T>
+  T record() const {
+    T r;
+    r.tree = tree;
+    r.method = variant.method;
+    r.variant = variant.label;
+    if constexpr (requires { r.params; }) r.params = params;
+    return r;
+  }
 };
 
 // What a variant still has to do on a tree; a resumed run skips the rest.
@@ -43,9 +53,9 @@ struct PendingWork {
 PendingWork pendingWork(const RunContext& run, const TreeSession& session, const VariantRun& v);
 
 // The equal-memory (or PSNR-target) search over the method's memory knob (bench/budget.h);
-// returns the bake record's "budget" object.
-nlohmann::json runBudget(RunContext& run, TreeSession& session, const VariantRun& v,
-                         const MemoryKnob& knob);
+// returns the bake record's "budget".
+BudgetRecord runBudget(RunContext& run, TreeSession& session, const VariantRun& v,
+                       const MemoryKnob& knob);
 
 // Renders and scores every pending view against the reference: PSNR, SSIM, FLIP, coverage and
 // what was drawn, one kind:"view" record each.
@@ -61,7 +71,7 @@ void runForests(RunContext& run, TreeSession& session, const VariantRun& v, Meth
 void runPopping(RunContext& run, TreeSession& session, const VariantRun& v, Method& method,
                 const std::vector<std::string>& paths);
 
-// {"primitives", "fragments", "leaf_geometry_fraction"}, as view and forest records carry it.
-nlohmann::json drawnJson(const DrawnStats& drawn);
+// What a frame drew, as view and forest records carry it.
+DrawnRecord drawnRecord(const DrawnStats& drawn);
 
 }  // namespace canopy

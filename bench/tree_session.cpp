@@ -2,7 +2,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <regex>
 
 #include <fmt/format.h>
 
@@ -21,24 +20,20 @@ void addRing(std::vector<EvalView>& views, const Tree& tree, const char* ring,
              const std::string& keyPrefix, const std::vector<ViewPose>& poses, float fov,
              const RenderSettings& render) {
   for (const ViewPose& pose : poses) {
-    views.push_back({keyPrefix + poseKey(pose),
-                     orbitCamera(tree.bounds, pose, fov),
-                     render.width,
-                     render.height,
-                     {{"ring", ring},
-                      {"fov_deg", fov},
-                      {"distance", pose.distance},
-                      {"elevation", pose.elevation},
-                      {"azimuth", pose.azimuth}},
-                     nullptr});
+    EvalView view;
+    view.key = keyPrefix + poseKey(pose);
+    view.camera = orbitCamera(tree.bounds, pose, fov);
+    view.width = render.width;
+    view.height = render.height;
+    view.ring = ring;
+    view.distance = pose.distance;
+    view.elevation = pose.elevation;
+    view.azimuth = pose.azimuth;
+    views.push_back(std::move(view));
   }
 }
 
 }  // namespace
-
-std::string safeName(const std::string& label) {
-  return std::regex_replace(label, std::regex("[^A-Za-z0-9_.=,-]"), "_");
-}
 
 std::vector<EvalView> evaluationViews(const Tree& tree, const ViewSettings& settings) {
   std::vector<EvalView> views;
@@ -46,18 +41,17 @@ std::vector<EvalView> evaluationViews(const Tree& tree, const ViewSettings& sett
   if (tree.captures) {
     const float radius = tree.boundingSphereRadius();
     for (const CapturedView& v : tree.captures->test) {
-      const std::string stem = std::filesystem::path(v.name).stem().string();
-      const double distance =
+      EvalView view;
+      view.key = "test_" + std::filesystem::path(v.name).stem().string();
+      view.camera = v.camera;
+      view.width = v.image.width;
+      view.height = v.image.height;
+      view.ring = "capture";
+      view.distance =
           std::round(10.0 * glm::length(v.camera.position - tree.bounds.center()) / radius) / 10.0;
-      views.push_back({"test_" + stem,
-                       v.camera,
-                       v.image.width,
-                       v.image.height,
-                       {{"ring", "capture"},
-                        {"fov_deg", v.camera.fovYDegrees},
-                        {"capture_view", v.name},
-                        {"distance", distance}},
-                       &v.image});
+      view.captureView = v.name;
+      view.captured = &v.image;
+      views.push_back(std::move(view));
     }
     return views;
   }
@@ -90,22 +84,23 @@ BakedMethod bakeMethod(const MethodVariant& variant, const Tree& tree, gl::Devic
     baked.method->upload(device);
   }
   gl::checkError(("upload of " + variant.label).c_str());
-  nlohmann::json diskBytes;
+  BakeRecord& record = baked.record;
   if (assetFolder) {
     std::filesystem::remove_all(*assetFolder);
     std::filesystem::create_directories(*assetFolder);
     AssetFolder asset(*assetFolder);
     baked.method->save(asset);
-    diskBytes = asset.sizeOnDisk();
+    record.diskBytes = asset.sizeOnDisk();
   }
-  baked.record = {{"kind", "bake"},
-                  {"bake_s", bakeSeconds},
-                  {"bake_peak_rss_bytes", peak},
-                  {"bake_peak_rss_scope", peakReset ? "bake" : "process"},
-                  {"memory_bytes", gl::toJson(device.ledger().totals(variant.label))},
-                  {"disk_bytes", diskBytes},
-                  {"params", baked.method->effectiveParams()},
-                  {"report", baked.method->bakeReport()}};
+  const gl::MemoryTotals memory = device.ledger().totals(variant.label);
+  record.method = variant.method;
+  record.variant = variant.label;
+  record.bakeSeconds = bakeSeconds;
+  record.bakePeakRssBytes = peak;
+  record.bakePeakRssScope = peakReset ? "bake" : "process";
+  record.memory = {memory.texture, memory.geometry, memory.other, memory.total()};
+  record.params = baked.method->effectiveParams();
+  record.report = baked.method->bakeReport();
   return baked;
 }
 

@@ -11,6 +11,8 @@
 
 #include "bench/experiment.h"
 #include "bench/harness.h"
+#include "bench/records.h"
+#include "bench/run_names.h"
 #include "common/tree.h"
 #include "methods/method.h"
 
@@ -24,7 +26,10 @@ struct EvalView {
   std::string key;  // unique per tree: names its record and image file
   Camera camera;
   int width = 0, height = 0;
-  nlohmann::json fields;                 // ring, fov_deg and the pose, as the record carries them
+  std::string ring;                      // "orbit", "closeup" or "capture"
+  double distance = 0.0;                 // bounding radii (rounded to 0.1 for capture views)
+  Absent<double> elevation, azimuth;     // orbit and close-up poses
+  Absent<std::string> captureView;       // a capture view's photograph
   const ImageRgbaF* captured = nullptr;  // the reference of a capture view
 };
 
@@ -32,10 +37,11 @@ struct EvalView {
 // views.
 std::vector<EvalView> evaluationViews(const Tree& tree, const ViewSettings& views);
 
-// A method baked and uploaded under its own ledger owner, with its kind:"bake" record.
+// A method baked and uploaded under its own ledger owner, with its kind:"bake" record (tree,
+// variant and renderer for the runner to fill).
 struct BakedMethod {
   std::unique_ptr<Method> method;
-  nlohmann::json record;
+  BakeRecord record;
 };
 
 // Everything the run needs of one tree, owned in one place: the tree, its views, and the
@@ -92,8 +98,5 @@ class TreeSession {
 BakedMethod bakeMethod(const MethodVariant& variant, const Tree& tree, gl::Device& device,
                        BakeContext context,
                        const std::optional<std::filesystem::path>& assetFolder);
-
-// What filesystem names a tree or variant label becomes (letters, digits, _ . = , - kept).
-std::string safeName(const std::string& label);
 
 }  // namespace canopy

@@ -8,10 +8,8 @@
 
 namespace canopy {
 
-nlohmann::json drawnJson(const DrawnStats& drawn) {
-  return {{"primitives", drawn.counts.primitives},
-          {"fragments", drawn.counts.fragments},
-          {"leaf_geometry_fraction", drawn.leafGeometryFraction}};
+DrawnRecord drawnRecord(const DrawnStats& drawn) {
+  return {drawn.counts.primitives, drawn.counts.fragments, drawn.leafGeometryFraction};
 }
 
 PendingWork pendingWork(const RunContext& run, const TreeSession& session, const VariantRun& v) {
@@ -24,7 +22,7 @@ PendingWork pendingWork(const RunContext& run, const TreeSession& session, const
     if (!store.has(v.prefix + fmt::format("forest|{}", size))) pending.forests.push_back(size);
   if (run.config.popping.enabled && session.hasMesh())
     for (const char* path : {"dolly", "orbit"})
-      if (!store.has(v.prefix + "popping|" + path)) pending.popping.push_back(path);
+      if (!store.has(v.prefix + "popping|" + path)) pending.popping.emplace_back(path);
   return pending;
 }
 
@@ -43,22 +41,25 @@ void runViews(RunContext& run, TreeSession& session, const VariantRun& v, Method
                    safeName(v.variant.label) / (view->key + ".png"),
                withOpaqueAlpha(image));
     }
-    nlohmann::json record = v.common;
-    record.update(view->fields);
-    record.update({{"kind", "view"},
-                   {"params", v.params},
-                   {"psnr", metrics.psnr},
-                   {"psnr_frame", metrics.psnrFrame},
-                   {"ssim", metrics.ssim},
-                   {"flip", metrics.flip},
-                   {"coverage_error", metrics.coverageError},
-                   {"union_pixels", metrics.unionPixels},
-                   {"resolution", {view->width, view->height}},
-                   {"supersample", render.supersample},
-                   {"drawn", drawnJson(drawn)},
-                   {"shading", render.shading == Shading::kLit ? "lit" : "unlit"},
-                   {"shadows", render.shadows}});
-    run.store.append(record, v.prefix + "view|" + view->key);
+    ViewRecord record = v.record<ViewRecord>();
+    record.ring = view->ring;
+    record.fovDegrees = view->camera.fovYDegrees;
+    record.distance = view->distance;
+    record.elevation = view->elevation;
+    record.azimuth = view->azimuth;
+    record.captureView = view->captureView;
+    record.psnr = metrics.psnr;
+    record.psnrFrame = metrics.psnrFrame;
+    record.ssim = metrics.ssim;
+    record.flip = metrics.flip;
+    record.coverageError = metrics.coverageError;
+    record.unionPixels = metrics.unionPixels;
+    record.resolution = {view->width, view->height};
+    record.supersample = render.supersample;
+    record.drawn = drawnRecord(drawn);
+    record.shading = render.shading == Shading::kLit ? "lit" : "unlit";
+    record.shadows = render.shadows;
+    run.store.append(std::move(record), v.prefix + "view|" + view->key);
     progress.advance();
   }
 }

@@ -48,9 +48,25 @@ def series(row, prefix):
     return sorted(points)
 
 
-def safe_name(label):
-    """The folder name canopy-bench gives a tree or variant label (runner.cpp safeName)."""
-    return re.sub(r"[^A-Za-z0-9_.=,-]", "_", label)
+class ImageIndex:
+    """The file-system names of a run's tree and variant labels, as canopy-bench wrote them
+    (names.json), so they are read rather than derived a second time: the folders of images/,
+    and the names figures take."""
+
+    def __init__(self, run_dir):
+        path = run_dir / "names.json"
+        data = json.loads(path.read_text()) if path.exists() else {"trees": {}, "variants": {}}
+        self.trees, self.variants = data["trees"], data["variants"]
+        self.variants.setdefault("reference", "reference")
+
+    def tree_name(self, tree):
+        return self.trees.get(tree)
+
+    def tree_dir(self, run_dir, tree):
+        return run_dir / "images" / self.trees[tree] if tree in self.trees else None
+
+    def variant_dir(self, tree_dir, variant):
+        return tree_dir / self.variants[variant] if variant in self.variants else None
 
 
 def plot_per_tree(rows, trees, prefix, xlabel, ylabel, log_y, path, extra=None):
@@ -228,13 +244,13 @@ def crop_view(view_dir):
     return [k for k in keys if k.startswith("closeup_")][:1] or keys[:1]
 
 
-def comparison_grid(run_dir, tree, variants, path, views=4):
+def comparison_grid(run_dir, index, tree, variants, path, views=4):
     """Each view: a row of images (reference, methods) and a row of error maps under them."""
-    tree_dir = run_dir / "images" / safe_name(tree)
-    reference_dir = tree_dir / "reference"
-    if not reference_dir.is_dir():
+    tree_dir = index.tree_dir(run_dir, tree)
+    if tree_dir is None or not (tree_dir / "reference").is_dir():
         return False
-    variants = [v for v in variants if (tree_dir / safe_name(v)).is_dir()]
+    reference_dir = tree_dir / "reference"
+    variants = [v for v in variants if index.variant_dir(tree_dir, v) and index.variant_dir(tree_dir, v).is_dir()]
     keys = pick_views(reference_dir, views)
     if not keys or not variants:
         return False
@@ -248,7 +264,7 @@ def comparison_grid(run_dir, tree, variants, path, views=4):
         axes[2 * r][0].set_title(f"reference\n{key}", fontsize=6)
         axes[2 * r + 1][0].axis("off")
         for c, variant in enumerate(variants, start=1):
-            image_path = tree_dir / safe_name(variant) / f"{key}.png"
+            image_path = index.variant_dir(tree_dir, variant) / f"{key}.png"
             if not image_path.exists():
                 axes[2 * r][c].axis("off")
                 axes[2 * r + 1][c].axis("off")
@@ -272,14 +288,15 @@ def comparison_grid(run_dir, tree, variants, path, views=4):
     return True
 
 
-def crops(run_dir, tree, variants, path, size=128):
+def crops(run_dir, index, tree, variants, path, size=128):
     """The nearest view's centre region at full resolution, reference then each variant."""
-    tree_dir = run_dir / "images" / safe_name(tree)
-    reference_dir = tree_dir / "reference"
-    if not reference_dir.is_dir():
+    tree_dir = index.tree_dir(run_dir, tree)
+    if tree_dir is None or not (tree_dir / "reference").is_dir():
         return False
+    reference_dir = tree_dir / "reference"
     keys = crop_view(reference_dir)
-    variants = [v for v in variants if (tree_dir / safe_name(v) / f"{keys[0]}.png").exists()] if keys else []
+    variants = [v for v in variants if index.variant_dir(tree_dir, v)
+                and (index.variant_dir(tree_dir, v) / f"{keys[0]}.png").exists()] if keys else []
     if not variants:
         return False
     reference = load_rgb(reference_dir / f"{keys[0]}.png")
@@ -289,7 +306,7 @@ def crops(run_dir, tree, variants, path, size=128):
     ys, xs = np.nonzero(mask)
     cy, cx = (int(ys.mean()), int(xs.mean())) if len(ys) else (h // 2, w // 2)
     y0, x0 = np.clip(cy - size // 2, 0, h - size), np.clip(cx - size // 2, 0, w - size)
-    images = [("reference", reference)] + [(v, load_rgb(tree_dir / safe_name(v) / f"{keys[0]}.png"))
+    images = [("reference", reference)] + [(v, load_rgb(index.variant_dir(tree_dir, v) / f"{keys[0]}.png"))
                                           for v in variants]
     fig, axes = plt.subplots(1, len(images), figsize=(2.2 * len(images), 2.5), squeeze=False)
     for axis, (label, image) in zip(axes[0], images):
@@ -303,7 +320,7 @@ def crops(run_dir, tree, variants, path, size=128):
     return True
 
 
-def plot_popping(run_dir, out):
+def plot_popping(run_dir, index, out):
     """Per tree: PSNR and temporal excess along the dolly (x: distance) and the orbit (x: azimuth),
     with ticks where a method switched level of detail. Returns the files written."""
     popping = run_dir / "popping.csv"
@@ -340,7 +357,9 @@ def plot_popping(run_dir, out):
                 axis.grid(True, alpha=0.3)
                 axis.legend(fontsize=6)
         fig.tight_layout()
-        name = f"popping_{safe_name(tree)}.png"
+        if index.tree_name(tree) is None:
+            continue
+        name = f"popping_{index.tree_name(tree)}.png"
         fig.savefig(out / name, dpi=150)
         plt.close(fig)
         written.append(name)
@@ -368,6 +387,7 @@ def make_figures(run_dir: Path, out_root: Path):
     meta = json.loads(meta_path.read_text())
     rows = list(csv.DictReader(summary.open()))
     closeups = meta.get("config", {}).get("views", {}).get("closeups")
+    index = ImageIndex(run_dir)
     out = out_root / run_dir.name
     out.mkdir(parents=True, exist_ok=True)
     renderer = meta.get("gl", {}).get("renderer", "unknown")
@@ -421,21 +441,23 @@ def make_figures(run_dir: Path, out_root: Path):
     made.append("- `bake_time.png`: bake time per tree and variant (log scale).")
     variants = [v for v in dict.fromkeys(r["variant"] for r in rows) if v != "polygonal"]
     for tree in trees:
+        if index.tree_name(tree) is None:
+            continue
         tree_variants = [r["variant"] for r in rows if r["tree"] == tree and r["variant"] in variants]
-        name = f"comparison_grid_{safe_name(tree)}.png"
-        if comparison_grid(run_dir, tree, tree_variants, out / name):
+        name = f"comparison_grid_{index.tree_name(tree)}.png"
+        if comparison_grid(run_dir, index, tree, tree_variants, out / name):
             made.append(f"- `{name}`: rows of views (one per distance ring, then a close-up), the reference "
                         "then each variant; under each image its per-pixel mean absolute sRGB error "
                         "(colour bar).")
-        name = f"crops_{safe_name(tree)}.png"
-        if crops(run_dir, tree, tree_variants, out / name):
+        name = f"crops_{index.tree_name(tree)}.png"
+        if crops(run_dir, index, tree, tree_variants, out / name):
             made.append(f"- `{name}`: 128×128-pixel crops at full resolution of a close-up view (or the "
                         "nearest view when the run has no close-up ring).")
         for keys, group in sweep_groups(tree_variants).items():
-            name = f"crops_{safe_name(tree)}_{safe_name(keys)}.png"
-            if crops(run_dir, tree, group, out / name):
+            name = f"crops_{index.tree_name(tree)}_{keys.replace(',', '_')}.png"
+            if crops(run_dir, index, tree, group, out / name):
                 made.append(f"- `{name}`: the same close-up across the `{keys}` sweep.")
-    for name in plot_popping(run_dir, out):
+    for name in plot_popping(run_dir, index, out):
         made.append(f"- `{name}`: along the dolly (close to far, log-spaced) and the orbit, per-frame PSNR "
                     "against the reference and the temporal error in excess of the reference's; ticks "
                     "mark frames where the method switched level of detail.")

@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "bench/results_store.h"
 #include "common/error.h"
 #include "common/gl/context.h"
 #include "common/lsystem.h"
@@ -74,6 +75,35 @@ inline int runCommand(const std::string& command, std::string* errorOutput = nul
   }
   std::filesystem::remove(errorFile);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// A record of fields["kind"] holding `fields` and defaults for the rest, read through the strict
+// schema: concise test records of the real format.
+inline Record makeRecord(const nlohmann::json& fields) {
+  const std::string kind = fields.at("kind");
+  nlohmann::json full;
+  if (kind == "tree") full = recordToJson(TreeRecord{});
+  if (kind == "bake") full = recordToJson(BakeRecord{});
+  if (kind == "view") full = recordToJson(ViewRecord{});
+  if (kind == "forest") full = recordToJson(ForestRecord{});
+  if (kind == "popping") full = recordToJson(PoppingRecord{});
+  if (kind == "skip") full = recordToJson(SkipRecord{});
+  full.update(fields);
+  return recordFromJson(full, "test record");
+}
+
+inline std::vector<Record> makeRecords(const std::vector<nlohmann::json>& fields) {
+  std::vector<Record> records;
+  for (const nlohmann::json& f : fields) records.push_back(makeRecord(f));
+  return records;
+}
+
+// The records of a metrics.jsonl (read through the schema) as JSON objects.
+inline std::vector<nlohmann::json> readJsonRecords(const std::filesystem::path& path) {
+  std::vector<nlohmann::json> records;
+  for (const Record& record : ResultsStore::readRecords(path))
+    records.push_back(recordToJson(record));
+  return records;
 }
 
 // Each (key, value) given alone to `method` must be an InputError whose message names the key.

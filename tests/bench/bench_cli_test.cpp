@@ -29,7 +29,7 @@ std::string tinyConfig(const std::string& name, int azimuths = 2) {
 
 std::multiset<std::string> keysOf(const std::filesystem::path& metrics) {
   std::multiset<std::string> keys;
-  for (const auto& record : ResultsStore::readRecords(metrics))
+  for (const auto& record : test::readJsonRecords(metrics))
     keys.insert(record.at("record_key").get<std::string>());
   return keys;
 }
@@ -43,7 +43,7 @@ TEST(BenchCli, RunsAConfigIntoTheResultsLayoutAndSkipsWhatIsDone) {
   for (const char* file : {"metrics.jsonl", "summary.csv", "summary.md", "meta.json"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / "out" / file)) << file;
   }
-  const auto records = ResultsStore::readRecords(dir / "out" / "metrics.jsonl");
+  const auto records = test::readJsonRecords(dir / "out" / "metrics.jsonl");
   // 1 tree + 2 variants × (1 bake + 8 views + 2 forests).
   ASSERT_EQ(records.size(), 1u + 2u * (1u + 8u + 2u));
   int views = 0;
@@ -161,13 +161,13 @@ TEST(BenchCli, KilledRunResumesWithoutLosingOrDuplicatingRecords) {
   const auto metrics = dir / "out" / "metrics.jsonl";
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   while (std::chrono::steady_clock::now() < deadline) {
-    if (std::filesystem::exists(metrics) && ResultsStore::readRecords(metrics).size() >= 10) break;
+    if (std::filesystem::exists(metrics) && test::readJsonRecords(metrics).size() >= 10) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   ::kill(child, SIGKILL);
   int status = 0;
   ::waitpid(child, &status, 0);
-  const size_t before = ResultsStore::readRecords(metrics).size();
+  const size_t before = test::readJsonRecords(metrics).size();
   ASSERT_GE(before, 10u);
   ASSERT_EQ(test::runCommand(kBench + " --quiet --config " + (dir / "tiny.json").string() +
                              " --out " + out),
@@ -239,7 +239,7 @@ TEST(BenchCli, CaptureFolderTreesAreScoredOnTheirHeldOutViews) {
                              (dir / "captures.json").string() + " --out " + (dir / "out").string()),
             0);
   int views = 0, skips = 0, forests = 0;
-  for (const auto& record : ResultsStore::readRecords(dir / "out" / "metrics.jsonl")) {
+  for (const auto& record : test::readJsonRecords(dir / "out" / "metrics.jsonl")) {
     const std::string kind = record.at("kind");
     if (kind == "skip") {
       ++skips;
@@ -284,7 +284,7 @@ TEST(BenchCli, BudgetSetsTheMemoryKnobAndPoppingRecordsEveryFrame) {
                               (dir / "budget.json").string() + " --out " + (dir / "out").string();
   ASSERT_EQ(test::runCommand(command), 0);
   int poppingRecords = 0;
-  for (const auto& record : ResultsStore::readRecords(dir / "out" / "metrics.jsonl")) {
+  for (const auto& record : test::readJsonRecords(dir / "out" / "metrics.jsonl")) {
     const std::string kind = record.at("kind");
     if (kind == "bake" && record.at("method") == "bbox_hierarchy") {
       const auto& budget = record.at("budget");
@@ -331,7 +331,7 @@ TEST(Report, LatexTableHasOneCellPerColumnAndEscapesNames) {
        {"method", "m"},
        {"variant", "m[a=1]"},
        {"bake_s", 1.5},
-       {"memory_bytes", {{"texture", 1e6}, {"geometry", 0}, {"other", 0}, {"total", 1e6}}},
+       {"memory_bytes", {{"texture", 1000000}, {"geometry", 0}, {"other", 0}, {"total", 1000000}}},
        {"disk_bytes", 5}},
       {{"kind", "view"},
        {"tree", "oak_1"},
@@ -353,7 +353,8 @@ TEST(Report, LatexTableHasOneCellPerColumnAndEscapesNames) {
        {"frame_ms_median", 23.8},
        {"frame_ms_p95", 30.0},
        {"speedup_vs_polygonal", 2.0}}};
-  const std::string tex = formatSummaryLatex(summarize(records), "run_1", "llvmpipe");
+  const std::string tex =
+      formatSummaryLatex(summarize(test::makeRecords(records)), "run_1", "llvmpipe");
   EXPECT_NE(tex.find("\\begin{tabular}{llrrrrrrr}"), std::string::npos)
       << tex;  // 2 text + 7 numbers
   EXPECT_NE(tex.find("oak\\_1 & m[a=1] & 1.50 & 1.00 & 20.00 & 0.500 & 0.200 & 0.100 & 2.00 \\\\"),
@@ -400,8 +401,9 @@ TEST(Report, CsvParsesBackAndMarkdownRowsMatchTheirHeader) {
          {"variant", variant},
          {"params", {{"a", 1}, {"b", "x"}}},
          {"bake_s", 2.25},
-         {"memory_bytes", {{"texture", 3e6}, {"geometry", 1e6}, {"other", 0}, {"total", 4e6}}},
-         {"disk_bytes", 2e6}});
+         {"memory_bytes",
+          {{"texture", 3000000}, {"geometry", 1000000}, {"other", 0}, {"total", 4000000}}},
+         {"disk_bytes", 2000000}});
     records.push_back({{"kind", "view"},
                        {"tree", "oak"},
                        {"method", "m"},
@@ -413,7 +415,7 @@ TEST(Report, CsvParsesBackAndMarkdownRowsMatchTheirHeader) {
                        {"ssim", 0.75},
                        {"coverage_error", 0.125}});
   }
-  const auto rows = summarize(records);
+  const auto rows = summarize(test::makeRecords(records));
   const std::string csv = formatSummaryCsv(rows);
   std::vector<std::string> lines;
   for (size_t start = 0, end; (end = csv.find('\n', start)) != std::string::npos; start = end + 1)

@@ -108,13 +108,15 @@ TEST(Popping, CsvHasOneLinePerFrame) {
   SummaryRow row;
   row.tree = "t";
   row.variant = "m";
-  row.popping.push_back({{"path", "dolly"},
-                         {"distance", {1.5, 3.0}},
-                         {"psnr_frame", {20.0, 21.0}},
-                         {"change", {0.0, 4.0}},
-                         {"reference_change", {0.0, 1.0}},
-                         {"temporal_excess", {0.0, 3.0}},
-                         {"lod_switch", {false, true}}});
+  PoppingRecord dolly;
+  dolly.path = "dolly";
+  dolly.distance = {1.5, 3.0};
+  dolly.psnrFrame = {20.0, 21.0};
+  dolly.change = {0.0, 4.0};
+  dolly.referenceChange = {0.0, 1.0};
+  dolly.temporalExcess = {0.0, 3.0};
+  dolly.lodSwitch = {false, true};
+  row.popping.push_back(dolly);
   const std::string csv = formatPoppingCsv({row});
   EXPECT_EQ(csv,
             "tree,variant,path,frame,distance,psnr,change,reference_change,temporal_excess,"

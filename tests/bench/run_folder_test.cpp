@@ -31,7 +31,7 @@ std::string config(int resolution, bool closeups = false) {
 }
 
 std::vector<nlohmann::json> recordsOf(const std::filesystem::path& run) {
-  return ResultsStore::readRecords(run / "metrics.jsonl");
+  return test::readJsonRecords(run / "metrics.jsonl");
 }
 
 std::vector<std::filesystem::path> previousRuns(const test::TempDir& dir) {
