@@ -3,6 +3,7 @@
 #include <functional>
 #include <vector>
 
+#include "common/config.h"
 #include "methods/method.h"
 
 namespace canopy {
@@ -11,10 +12,18 @@ namespace canopy {
 // `tolerance` of X (the multi-layer paper's Fig. 13 protocol); {"psnr_db": Y} finds the least
 // memory whose mean PSNR over the config's views reaches Y.
 struct BudgetSettings {
-  double memoryMb = 0.0;    // > 0: equal-memory mode
-  double psnrDb = 0.0;      // > 0: PSNR-target mode
-  double tolerance = 0.05;  // relative, for memory
-  int maxSteps = 12;        // bakes per method at most
+  double memoryMb = 0.0;
+  double psnrDb = 0.0;
+  double tolerance = 0.05;
+  int maxSteps = 12;
+
+  template <class V>
+  void visit(V& v) {
+    v("memory_mb", memoryMb, 0.0, 1e6, "> 0: equal memory, each method's knob set to this");
+    v("psnr_db", psnrDb, 0.0, 100.0, "> 0: the least memory whose mean PSNR reaches this");
+    v("tolerance", tolerance, 0.001, 0.5, "relative tolerance of the memory target");
+    v("max_steps", maxSteps, 2, 64, "bakes per method at most");
+  }
 };
 
 struct KnobSearch {

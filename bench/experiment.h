@@ -25,26 +25,49 @@ struct MethodVariant {
 // leaf spans tens of pixels (the scale of the multi-layer paper's Fig. 13). Scored like every
 // view; its records say "ring": "closeup".
 struct CloseupSettings {
-  bool enabled = false;
-  float distance = 1.5f;     // bounding-sphere radii from the centre
-  float fovYDegrees = 8.0f;  // vertical field of view
+  bool enabled = false;  // the config has "closeups"
+  float distance = 1.5f;
+  float fovYDegrees = 8.0f;
   int azimuths = 4;
   std::vector<float> elevations{0.0f, 30.0f};
+
+  template <class V>
+  void visit(V& v) {
+    v("distance", distance, 1.01f, 10000.0f, "bounding-sphere radii from the centre");
+    v("fov_deg", fovYDegrees, 0.5f, 170.0f, "vertical field of view");
+    v("azimuths", azimuths, 1, 360, "views evenly spaced about the up axis");
+    v("elevations", elevations, -90.0f, 90.0f, "degrees above the horizon");
+  }
 };
 
+// The config's "views": how images are made (RenderSettings) and the orbit rings.
 struct ViewSettings {
   RenderSettings render;
-  std::vector<float> distances{1.5f, 4.0f, 12.0f};  // bounding-sphere radii
+  std::vector<float> distances{1.5f, 4.0f, 12.0f};
   std::vector<float> elevations{0.0f, 30.0f, 60.0f, 90.0f};
   int azimuths = 8;
   CloseupSettings closeups;
+
+  template <class V>
+  void visit(V& v) {
+    render.visit(v);
+    v("distances", distances, 1.01f, 10000.0f, "orbit rings, in bounding-sphere radii");
+    v("elevations", elevations, -90.0f, 90.0f, "degrees above the horizon (90: top views)");
+    v("azimuths", azimuths, 1, 360, "views per ring and elevation, evenly spaced");
+  }
 };
 
+// The config's "forests": the sizes, the timing, and "camera_path" (a path recorded in
+// canopy-view, replayed instead of the orbit).
 struct ForestSettings {
   std::vector<int> sizes{1, 10, 100};
-  // frames, warmup, blocks, resolution and "camera_path" (a path recorded in canopy-view,
-  // replayed instead of the orbit).
   ForestTiming timing;
+
+  template <class V>
+  void visit(V& v) {
+    v("sizes", sizes, 1, 1'000'000, "trees per forest, each timed and scored");
+    timing.visit(v);
+  }
 };
 
 struct ExperimentConfig {

@@ -241,6 +241,38 @@ double Harness::timeFrame(Method& method, const gl::RenderTarget& target, const 
   return millisecondsSince(start);
 }
 
+void Harness::scoreBlock(Method& reference, Method& method, const std::vector<Instance>& forest,
+                         const Aabb& treeBounds, const Camera& camera, int width, int height,
+                         int block, bool renderReference, ReferenceFrames& frames, int blocks,
+                         InterleavedTimes& result) {
+  // The block's scored frame: its first camera, untimed, read back from each (the reference's
+  // from the cache once it holds them).
+  if (renderReference) {
+    DrawnStats drawn;
+    frames.images.emplace_back(
+        renderForestFrame(reference, forest, treeBounds, camera, width, height, &drawn),
+        mSettings.flipPixelsPerDegree);
+    frames.drawn.push_back(drawn);
+  }
+  const FlipReference& scored = frames.images[size_t(block)];
+  const ImageRgba8& expected = scored.image();
+  const DrawnStats& referenceDrawn = frames.drawn[size_t(block)];
+  DrawnStats methodDrawn;
+  const ImageRgba8 image =
+      renderForestFrame(method, forest, treeBounds, camera, width, height, &methodDrawn);
+  const ImageMetrics metrics = compareImages(scored, image);
+  result.psnr += metrics.psnrFrame / blocks;
+  result.flip += metrics.flip / blocks;
+  result.coverageError += metrics.coverageErrorFrame / blocks;
+  long covered = 0;
+  for (size_t p = 3; p < expected.pixels.size(); p += 4) covered += expected.pixels[p] > 0;
+  result.referenceCoverage += double(covered) / double(width * height) / blocks;
+  result.drawn.counts += methodDrawn.counts;
+  result.drawn.leafGeometryFraction += methodDrawn.leafGeometryFraction / blocks;
+  result.referenceDrawn.counts += referenceDrawn.counts;
+  result.referenceDrawn.leafGeometryFraction += referenceDrawn.leafGeometryFraction / blocks;
+}
+
 InterleavedTimes Harness::timeInterleaved(Method& reference, Method& method,
                                           const std::vector<Instance>& forest,
                                           const Aabb& treeBounds, const ForestTiming& timing,
@@ -274,8 +306,8 @@ InterleavedTimes Harness::timeInterleaved(Method& reference, Method& method,
       double ms[2];  // [0] reference, [1] method
       for (int turn = 0; turn < 2; ++turn) {
         const int which = i % 2 == 0 ? turn : 1 - turn;
-        ms[which] = timeFrame(which == 0 ? reference : method, target, camera(i), width, height,
-                              scene);
+        ms[which] =
+            timeFrame(which == 0 ? reference : method, target, camera(i), width, height, scene);
       }
       referenceMs.push_back(ms[0]);
       methodMs.push_back(ms[1]);
@@ -283,32 +315,8 @@ InterleavedTimes Harness::timeInterleaved(Method& reference, Method& method,
     }
     frameRatios.insert(frameRatios.end(), blockRatios.begin(), blockRatios.end());
     result.blockRatios.push_back(quantile(blockRatios, 0.5));
-    // The block's scored frame: its first camera, untimed, read back from each (the
-    // reference's from the cache once it holds them).
-    if (renderReference) {
-      DrawnStats drawn;
-      frames.images.emplace_back(
-          renderForestFrame(reference, forest, treeBounds, camera(first), width, height, &drawn),
-          mSettings.flipPixelsPerDegree);
-      frames.drawn.push_back(drawn);
-    }
-    const FlipReference& scored = frames.images[size_t(block)];
-    const ImageRgba8& expected = scored.image();
-    const DrawnStats& referenceDrawn = frames.drawn[size_t(block)];
-    DrawnStats methodDrawn;
-    const ImageRgba8 image =
-        renderForestFrame(method, forest, treeBounds, camera(first), width, height, &methodDrawn);
-    const ImageMetrics metrics = compareImages(scored, image);
-    result.psnr += metrics.psnrFrame / blocks;
-    result.flip += metrics.flip / blocks;
-    result.coverageError += metrics.coverageErrorFrame / blocks;
-    long covered = 0;
-    for (size_t p = 3; p < expected.pixels.size(); p += 4) covered += expected.pixels[p] > 0;
-    result.referenceCoverage += double(covered) / double(width * height) / blocks;
-    result.drawn.counts += methodDrawn.counts;
-    result.drawn.leafGeometryFraction += methodDrawn.leafGeometryFraction / blocks;
-    result.referenceDrawn.counts += referenceDrawn.counts;
-    result.referenceDrawn.leafGeometryFraction += referenceDrawn.leafGeometryFraction / blocks;
+    scoreBlock(reference, method, forest, treeBounds, camera(first), width, height, block,
+               renderReference, frames, blocks, result);
   }
   for (gl::DrawCounts* counts : {&result.drawn.counts, &result.referenceDrawn.counts}) {
     counts->primitives /= uint64_t(blocks);  // sums over the blocks → means

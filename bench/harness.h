@@ -5,6 +5,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "common/config.h"
 #include "common/flip.h"
 #include "common/gl/device.h"
 #include "common/gl/draw_statistics.h"
@@ -15,20 +16,40 @@
 
 namespace canopy {
 
-// How every image is made, for the reference and every method alike.
+// How every image is made, for the reference and every method alike: the config's "views" keys
+// (besides the rings). Each field is documented where visit() names it.
 struct RenderSettings {
-  int width = 512;  // evaluation resolution
+  int width = 512;
   int height = 512;
-  int supersample = 2;        // rendered at width·s × height·s, box-filtered down
-  float fovYDegrees = 40.0f;  // vertical field of view
+  int supersample = 2;
+  float fovYDegrees = 40.0f;
   Shading shading = Shading::kUnlit;
-  glm::vec3 background{0.5f, 0.6f, 0.75f};     // sRGB, the colour images are composited over
-  glm::vec3 lightDirection{0.3f, 0.8f, 0.5f};  // towards the light (normalised on use)
+  glm::vec3 background{0.5f, 0.6f, 0.75f};
+  glm::vec3 lightDirection{0.3f, 0.8f, 0.5f};
   float ambient = 0.35f;
-  bool ambientOcclusion = true;  // lit: AO scales the ambient term, for the reference too
-  bool shadows = false;      // lit only: a shadow map rendered with the method itself each frame
-  int shadowMapSize = 2048;  // texels per side
-  double flipPixelsPerDegree = kFlipDefaultPixelsPerDegree;  // FLIP's viewing condition
+  bool ambientOcclusion = true;
+  bool shadows = false;
+  int shadowMapSize = 2048;
+  double flipPixelsPerDegree = kFlipDefaultPixelsPerDegree;
+
+  template <class V>
+  void visit(V& v) {
+    v("resolution", Resolution{width, height}, 16, 8192, "evaluation resolution of the views");
+    v("supersample", supersample, 1, 8,
+      "views are rendered at resolution × this per side and box-filtered down");
+    v("fov_deg", fovYDegrees, 1.0f, 170.0f, "vertical field of view of the orbit rings");
+    v("shading", shading, EnumNames<Shading>{{"unlit", Shading::kUnlit}, {"lit", Shading::kLit}},
+      "albedo only, or two-sided Lambert with an ambient term");
+    v("background", background, 0.0f, 1.0f, "sRGB colour every image is composited over");
+    v("light_direction", lightDirection, -1.0f, 1.0f, "towards the light (normalised on use)");
+    v("ambient", ambient, 0.0f, 1.0f, "share of the ambient term in lit shading");
+    v("ambient_occlusion", ambientOcclusion,
+      "lit: baked AO scales the ambient term, the reference's too (false: nobody's)");
+    v("shadows", shadows, "lit: a shadow map rendered with the method itself each frame");
+    v("shadow_map_size", shadowMapSize, 64, 16384, "shadow map texels per side");
+    v("flip_ppd", flipPixelsPerDegree, 1.0, 1000.0,
+      "FLIP's viewing condition in pixels per degree (the paper's 67)");
+  }
 };
 
 struct FrameTimes {
@@ -45,14 +66,25 @@ struct DrawnStats {
       0.0;  // leaf polygons drawn / (leaves × instances); 0 without leaves
 };
 
-// A forest timed along a camera path against the reference, and scored against it.
+// A forest timed along a camera path against the reference, and scored against it: the config's
+// "forests" keys (besides the sizes and the camera path file).
 struct ForestTiming {
-  int frames = 60;  // timed frames of each method
-  int warmup = 10;  // untimed frames of each before
-  int blocks = 5;   // the frames split into this many blocks, each timed reference/method in turn
+  int frames = 60;
+  int warmup = 10;
+  int blocks = 5;
   int width = 512;
   int height = 512;
   std::vector<Camera> path;  // empty: the benchmark's orbit (forestCamera)
+
+  template <class V>
+  void visit(V& v) {
+    v("frames", frames, 1, 100'000, "timed frames of each, the method and the reference");
+    v("warmup", warmup, 0, 100'000, "untimed frames of each before");
+    v("blocks", blocks, 1, 10'000,
+      "the frames split into this many blocks, each timed reference/method in turn");
+    v("resolution", Resolution{width, height}, 16, 8192,
+      "the forest frame (no supersampling; default: the views' resolution)");
+  }
 };
 
 // Blocks of reference and method frames alternate on the same cameras (ABBA: each block's first
@@ -138,6 +170,12 @@ class Harness {
   ImageRgbaF readTarget(const gl::RenderTarget& target) const;
   double timeFrame(Method& method, const gl::RenderTarget& target, const Camera& camera, int width,
                    int height, const Aabb& scene);
+  // Reads back and scores one block's frame of each (timeInterleaved), adding its share to the
+  // result's means.
+  void scoreBlock(Method& reference, Method& method, const std::vector<Instance>& forest,
+                  const Aabb& treeBounds, const Camera& camera, int width, int height, int block,
+                  bool renderReference, ReferenceFrames& frames, int blocks,
+                  InterleavedTimes& result);
 
   gl::Device& mDevice;
   RenderSettings mSettings;

@@ -3,22 +3,34 @@
 #include <cstdint>
 #include <vector>
 
+#include "common/config.h"
 #include "common/image.h"
 #include "common/tree.h"
 #include "common/views.h"
 
 namespace canopy {
 
-// Where the popping metric looks from (config "popping").
+// Where the popping metric looks from (config "popping"). Each field is documented where visit()
+// names it.
 struct PoppingSettings {
-  bool enabled = false;
-  int frames = 48;             // frames per path
-  float nearDistance = 1.5f;   // dolly: from this distance (bounding radii) ...
-  float farDistance = 24.0f;   // ... to this one, log-spaced
-  float elevation = 10.0f;     // degrees, both paths
-  float orbitDistance = 6.0f;  // orbit: distance (bounding radii)
+  bool enabled = false;  // the config has "popping"
+  int frames = 48;
+  float nearDistance = 1.5f;
+  float farDistance = 24.0f;
+  float elevation = 10.0f;
+  float orbitDistance = 6.0f;
   int width = 256;
   int height = 256;
+
+  template <class V>
+  void visit(V& v) {
+    v("frames", frames, 2, 10'000, "frames per path");
+    v("near", nearDistance, 1.01f, 10'000.0f, "dolly: from this distance (bounding radii) ...");
+    v("far", farDistance, 1.01f, 100'000.0f, "... to this one, log-spaced");
+    v("elevation", elevation, -89.0f, 89.0f, "degrees above the horizon, both paths");
+    v("orbit_distance", orbitDistance, 1.01f, 10'000.0f, "orbit: distance (bounding radii)");
+    v("resolution", Resolution{width, height}, 16, 8192, "frame size (supersampled like views)");
+  }
 };
 
 struct PathFrame {

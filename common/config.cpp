@@ -54,6 +54,37 @@ void ConfigObject::finish(const std::string& owner) const {
   }
 }
 
+void ParamReader::operator()(const char* key, std::string& field,
+                             const std::vector<std::string>& allowed, const char*) {
+  if (!mConfig.has(key)) return;
+  const auto value = mConfig.get<std::string>(key);
+  if (std::find(allowed.begin(), allowed.end(), value) == allowed.end()) {
+    throwInputError("{}: parameter '{}' = '{}' is not one of {}", mOwner, mConfig.keyPath(key),
+                    value, nlohmann::json(allowed).dump());
+  }
+  field = value;
+}
+
+void ParamReader::operator()(const char* key, glm::vec3& field, float lo, float hi, const char*) {
+  if (!mConfig.has(key)) return;
+  const std::vector<float> v = fixedList(key, 3, lo, hi, "three numbers");
+  field = {v[0], v[1], v[2]};
+}
+
+void ParamReader::operator()(const char* key, Resolution field, int lo, int hi, const char*) {
+  if (!mConfig.has(key)) return;
+  const std::vector<int> v = fixedList(key, 2, lo, hi, "[width, height]");
+  field.width = v[0];
+  field.height = v[1];
+}
+
+std::string ParamDescriber::oneOf(const std::vector<std::string>& allowed) {
+  std::string out = "one of ";
+  for (size_t i = 0; i < allowed.size(); ++i)
+    out += (i ? ", " : "") + nlohmann::json(allowed[i]).dump();
+  return out;
+}
+
 nlohmann::json readJsonFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throwInputError("{}: cannot open file", path);

@@ -1,10 +1,17 @@
 #pragma once
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <optional>
 #include <set>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
+#include <fmt/ranges.h>
+#include <glm/vec3.hpp>
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
@@ -52,6 +59,16 @@ class ConfigObject {
         if (!value.is_number()) throw std::invalid_argument("expected a number");
         if constexpr (std::is_integral_v<T>) {
           if (!value.is_number_integer()) throw std::invalid_argument("expected an integer");
+          // In range of T, not wrapped into it (4294967297 is no int).
+          const bool fits =
+              value.is_number_unsigned()
+                  ? value.get<uint64_t>() <= uint64_t(std::numeric_limits<T>::max())
+                  : value.get<int64_t>() >= int64_t(std::numeric_limits<T>::min()) &&
+                        (std::is_unsigned_v<T> ||
+                         value.get<int64_t>() <= int64_t(std::numeric_limits<T>::max()));
+          if (!fits) throw std::invalid_argument("integer out of range");
+        } else if (!std::isfinite(value.get<double>())) {
+          throw std::invalid_argument("not a finite number");
         }
       } else if constexpr (std::is_same_v<T, std::string>) {
         if (!value.is_string()) throw std::invalid_argument("expected a string");
@@ -71,39 +88,87 @@ class ConfigObject {
 // Reads a JSON file; InputError naming the file when it is missing or not valid JSON.
 nlohmann::json readJsonFile(const std::string& path);
 
-// Typed parameter structs describe their fields once, through a visitor:
-//   template <class V> void visit(V& v) { v("hash_resolution", hashResolution, 1, 4096); }
-// ParamReader fills them from a config (range-checked, unknown keys rejected) and ParamWriter
-// writes them back as the effective parameters, so reading and reporting cannot drift apart.
+// Typed parameter structs describe their fields once, through a visitor, each with its range and
+// its documentation:
+//   template <class V> void visit(V& v) {
+//     v("hash_resolution", hashResolution, 1, 4096, "hash cells along a billboard's side");
+//   }
+// ParamReader fills them from a config (range-checked, unknown keys rejected), ParamWriter writes
+// them back as the effective parameters and ParamDescriber lists them (key, type, default, range,
+// doc) for --list-methods and docs/METHODS.md, so reading, reporting and documenting cannot drift
+// apart. Field kinds: a number in [lo, hi]; bool; a free string; a string from a list; an enum
+// named by strings; a non-empty list of numbers in [lo, hi]; a glm::vec3; a Resolution.
+
+// Two integers configured as one [width, height] key.
+struct Resolution {
+  int& width;
+  int& height;
+};
+
+template <typename E>
+using EnumNames = std::vector<std::pair<std::string, E>>;
+
 class ParamReader {
  public:
   ParamReader(ConfigObject& config, std::string owner)
       : mConfig(config), mOwner(std::move(owner)) {}
 
   template <typename T>
-  void operator()(const char* key, T& field, T lo, T hi) {
+  requires std::is_arithmetic_v<T>
+  void operator()(const char* key, T& field, T lo, T hi, const char*) {
+    if (mConfig.has(key)) field = checked(key, mConfig.get<T>(key), lo, hi);
+  }
+  void operator()(const char* key, bool& field, const char*) {
+    if (mConfig.has(key)) field = mConfig.get<bool>(key);
+  }
+  void operator()(const char* key, std::string& field, const char*) {
+    if (mConfig.has(key)) field = mConfig.get<std::string>(key);
+  }
+  void operator()(const char* key, std::string& field, const std::vector<std::string>& allowed,
+                  const char*);
+  template <typename E>
+  void operator()(const char* key, E& field, const EnumNames<E>& names, const char*) {
     if (!mConfig.has(key)) return;
-    const T value = mConfig.get<T>(key);
+    std::vector<std::string> allowed;
+    for (const auto& [name, value] : names) allowed.push_back(name);
+    std::string name = allowed.front();
+    (*this)(key, name, allowed, "");
+    for (const auto& [n, value] : names)
+      if (n == name) field = value;
+  }
+  template <typename T>
+  void operator()(const char* key, std::vector<T>& field, T lo, T hi, const char*) {
+    if (!mConfig.has(key)) return;
+    const nlohmann::json& list = mConfig.require(key);
+    if (!list.is_array() || list.empty())
+      throwInputError("{}: parameter '{}' must be a non-empty list", mOwner, mConfig.keyPath(key));
+    std::vector<T> values;
+    for (const nlohmann::json& item : list)
+      values.push_back(checked(key, mConfig.convert<T>(item, key), lo, hi));
+    field = std::move(values);
+  }
+  void operator()(const char* key, glm::vec3& field, float lo, float hi, const char*);
+  void operator()(const char* key, Resolution field, int lo, int hi, const char*);
+
+ private:
+  template <typename T>
+  T checked(const char* key, T value, T lo, T hi) const {
     if (!(value >= lo && value <= hi)) {
       throwInputError("{}: parameter '{}' = {} is out of range [{}, {}]", mOwner,
                       mConfig.keyPath(key), value, lo, hi);
     }
-    field = value;
+    return value;
   }
-  void operator()(const char* key, bool& field) {
-    if (mConfig.has(key)) field = mConfig.get<bool>(key);
-  }
-  void operator()(const char* key, std::string& field, const std::vector<std::string>& allowed) {
-    if (!mConfig.has(key)) return;
-    const auto value = mConfig.get<std::string>(key);
-    if (std::find(allowed.begin(), allowed.end(), value) == allowed.end()) {
-      throwInputError("{}: parameter '{}' = '{}' is not one of {}", mOwner, mConfig.keyPath(key),
-                      value, nlohmann::json(allowed).dump());
-    }
-    field = value;
+  // Exactly `count` numbers in [lo, hi].
+  template <typename T>
+  std::vector<T> fixedList(const char* key, size_t count, T lo, T hi, const char* shape) {
+    std::vector<T> values;
+    (*this)(key, values, lo, hi, "");
+    if (values.size() != count)
+      throwInputError("{}: parameter '{}' must be {}", mOwner, mConfig.keyPath(key), shape);
+    return values;
   }
 
- private:
   ConfigObject& mConfig;
   std::string mOwner;
 };
@@ -111,18 +176,102 @@ class ParamReader {
 class ParamWriter {
  public:
   template <typename T>
-  void operator()(const char* key, const T& field, T, T) {
+  requires std::is_arithmetic_v<T>
+  void operator()(const char* key, const T& field, T, T, const char*) { mJson[key] = field; }
+  void operator()(const char* key, const bool& field, const char*) { mJson[key] = field; }
+  void operator()(const char* key, const std::string& field, const char*) { mJson[key] = field; }
+  void operator()(const char* key, const std::string& field, const std::vector<std::string>&,
+                  const char*) {
     mJson[key] = field;
   }
-  void operator()(const char* key, const bool& field) { mJson[key] = field; }
-  void operator()(const char* key, const std::string& field, const std::vector<std::string>&) {
+  template <typename E>
+  void operator()(const char* key, const E& field, const EnumNames<E>& names, const char*) {
+    for (const auto& [name, value] : names)
+      if (value == field) mJson[key] = name;
+  }
+  template <typename T>
+  void operator()(const char* key, const std::vector<T>& field, T, T, const char*) {
     mJson[key] = field;
+  }
+  void operator()(const char* key, const glm::vec3& field, float, float, const char*) {
+    mJson[key] = {field.x, field.y, field.z};
+  }
+  void operator()(const char* key, Resolution field, int, int, const char*) {
+    mJson[key] = {field.width, field.height};
   }
   nlohmann::json& json() { return mJson; }
 
  private:
   nlohmann::json mJson = nlohmann::json::object();
 };
+
+// One parameter as a reader sees it: the config key, its type, its default, its range, its doc.
+struct ParamDoc {
+  std::string key, type, defaultValue, range, doc;
+};
+
+// Lists the fields of a parameter struct (visited on its default-constructed value).
+class ParamDescriber {
+ public:
+  template <typename T>
+  requires std::is_arithmetic_v<T>
+  void operator()(const char* key, const T& field, T lo, T hi, const char* doc) {
+    add(key, std::is_integral_v<T> ? "int" : "float", fmt::format("{}", field),
+        fmt::format("[{}, {}]", lo, hi), doc);
+  }
+  void operator()(const char* key, const bool& field, const char* doc) {
+    add(key, "bool", field ? "true" : "false", "", doc);
+  }
+  void operator()(const char* key, const std::string& field, const char* doc) {
+    add(key, "string", nlohmann::json(field).dump(), "", doc);
+  }
+  void operator()(const char* key, const std::string& field,
+                  const std::vector<std::string>& allowed, const char* doc) {
+    add(key, "string", nlohmann::json(field).dump(), oneOf(allowed), doc);
+  }
+  template <typename E>
+  void operator()(const char* key, const E& field, const EnumNames<E>& names, const char* doc) {
+    std::vector<std::string> allowed;
+    std::string current;
+    for (const auto& [name, value] : names) {
+      allowed.push_back(name);
+      if (value == field) current = nlohmann::json(name).dump();
+    }
+    add(key, "string", current, oneOf(allowed), doc);
+  }
+  template <typename T>
+  void operator()(const char* key, const std::vector<T>& field, T lo, T hi, const char* doc) {
+    add(key, std::is_integral_v<T> ? "list of int" : "list of float",
+        fmt::format("[{}]", fmt::join(field, ", ")), fmt::format("each in [{}, {}]", lo, hi), doc);
+  }
+  void operator()(const char* key, const glm::vec3& field, float lo, float hi, const char* doc) {
+    add(key, "3 floats", fmt::format("[{}, {}, {}]", field.x, field.y, field.z),
+        fmt::format("each in [{}, {}]", lo, hi), doc);
+  }
+  void operator()(const char* key, Resolution field, int lo, int hi, const char* doc) {
+    add(key, "[width, height]", fmt::format("[{}, {}]", field.width, field.height),
+        fmt::format("each in [{}, {}]", lo, hi), doc);
+  }
+  const std::vector<ParamDoc>& parameters() const { return mParameters; }
+
+ private:
+  static std::string oneOf(const std::vector<std::string>& allowed);
+  void add(std::string key, std::string type, std::string value, std::string range,
+           const char* doc) {
+    mParameters.push_back(
+        {std::move(key), std::move(type), std::move(value), std::move(range), doc ? doc : ""});
+  }
+  std::vector<ParamDoc> mParameters;
+};
+
+// Every parameter of `Params`, with the defaults of a default-constructed one.
+template <typename Params>
+std::vector<ParamDoc> describeParams() {
+  Params params;
+  ParamDescriber describer;
+  params.visit(describer);
+  return describer.parameters();
+}
 
 // Fills `params` from `config` (an object of parameters; may be null for all defaults) and
 // rejects unknown keys, naming `owner`.

@@ -1,41 +1,61 @@
 #include "methods/method.h"
 
+#include <algorithm>
 #include <fstream>
+
+#include <fmt/format.h>
 
 #include "common/atomic_file.h"
 #include "common/config.h"
 
 namespace canopy {
 
-void AssetFolder::writeBlob(const std::string& name, const void* data, size_t bytes) {
-  writeTextAtomically(mFolder / name, std::string_view(static_cast<const char*>(data), bytes));
-}
+namespace {
 
-void AssetFolder::writeImage(const std::string& name, const ImageRgba8& image) {
-  writePng(mFolder / name, image);
+// The part of the header every asset has.
+struct AssetDescription {
+  std::string method;
+  nlohmann::json params, report;
+  template <class V>
+  void visit(V& v) {
+    v("method", method);
+    v("params", params);
+    v("report", report);
+  }
+};
+
+}  // namespace
+
+void AssetFolder::describe(const std::string& method, const nlohmann::json& params,
+                           const nlohmann::json& report) {
+  writeFields(AssetDescription{method, params, report});
 }
 
 void AssetFolder::writeHeader() {
   writeTextAtomically(mFolder / "asset.json", mHeader.dump(2));
 }
 
-void AssetFolder::readHeader() {
-  mHeader = readJsonFile((mFolder / "asset.json").string());
-}
-
-void AssetFolder::describe(const std::string& method, const nlohmann::json& params,
-                           const nlohmann::json& report) {
-  mHeader["method"] = method;
-  mHeader["params"] = params;
-  mHeader["report"] = report;
-}
-
-void AssetFolder::readHeaderOf(const std::string& method) {
-  readHeader();
-  if (mHeader.value("method", "") != method) {
-    throwInputError("{}: not a {} asset (asset.json names '{}')", mFolder.string(), method,
-                    mHeader.value("method", ""));
+nlohmann::json AssetFolder::readHeaderOf(const std::string& method) {
+  mHeader = readJsonFile(headerPath());
+  mReadKeys.clear();
+  if (!mHeader.is_object()) throwInputError("{}: not an asset header (an object)", headerPath());
+  const std::string named =
+      mHeader.contains("method") && mHeader["method"].is_string() ? mHeader["method"] : "";
+  if (named != method) {
+    throwInputError("{}: not a {} asset (asset.json names '{}')", mFolder.string(), method, named);
   }
+  AssetDescription description;
+  readFields(description);
+  return description.report;
+}
+
+void AssetFolder::finishReading() const {
+  for (const auto& [key, value] : mHeader.items())
+    if (!mReadKeys.contains(key)) throwInputError("{}: unknown key '{}'", headerPath(), key);
+}
+
+void AssetFolder::writeBlob(const std::string& name, const void* data, size_t bytes) {
+  writeTextAtomically(mFolder / name, std::string_view(static_cast<const char*>(data), bytes));
 }
 
 std::vector<uint8_t> AssetFolder::readBlob(const std::string& name) const {
@@ -45,8 +65,24 @@ std::vector<uint8_t> AssetFolder::readBlob(const std::string& name) const {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
+void AssetFolder::writeImage(const std::string& name, const ImageRgba8& image) {
+  writePng(mFolder / name, image);
+}
+
 ImageRgba8 AssetFolder::readImage(const std::string& name) const {
   return canopy::readImage(mFolder / name);
+}
+
+void AssetFolder::writeImages(const std::string& pattern, const std::vector<ImageRgba8>& images) {
+  for (size_t i = 0; i < images.size(); ++i)
+    writeImage(fmt::format(fmt::runtime(pattern), i), images[i]);
+}
+
+std::vector<ImageRgba8> AssetFolder::readImages(const std::string& pattern, size_t count) const {
+  std::vector<ImageRgba8> images;
+  for (size_t i = 0; i < count; ++i)
+    images.push_back(readImage(fmt::format(fmt::runtime(pattern), i)));
+  return images;
 }
 
 uint64_t AssetFolder::sizeOnDisk() const {
@@ -55,6 +91,33 @@ uint64_t AssetFolder::sizeOnDisk() const {
     if (entry.is_regular_file()) total += entry.file_size();
   }
   return total;
+}
+
+std::string parameterTableMarkdown(const MethodInfo& info) {
+  std::string out = "| key | type | default | range | what |\n|---|---|---|---|---|\n";
+  for (const ParamDoc& p : info.parameters)
+    out += fmt::format("| `{}` | {} | `{}` | {} | {} |\n", p.key, p.type, p.defaultValue, p.range,
+                       p.doc);
+  return out;
+}
+
+std::string parameterTableText(const MethodInfo& info) {
+  size_t keyWidth = 3, typeWidth = 4, defaultWidth = 7, rangeWidth = 5;
+  for (const ParamDoc& p : info.parameters) {
+    keyWidth = std::max(keyWidth, p.key.size());
+    typeWidth = std::max(typeWidth, p.type.size());
+    defaultWidth = std::max(defaultWidth, p.defaultValue.size());
+    rangeWidth = std::max(rangeWidth, p.range.size());
+  }
+  const auto line = [&](const std::string& key, const std::string& type, const std::string& value,
+                        const std::string& range, const std::string& doc) {
+    return fmt::format("  {:<{}}  {:<{}}  {:<{}}  {:<{}}  {}\n", key, keyWidth, type, typeWidth,
+                       value, defaultWidth, range, rangeWidth, doc);
+  };
+  std::string out = line("key", "type", "default", "range", "what");
+  for (const ParamDoc& p : info.parameters)
+    out += line(p.key, p.type, p.defaultValue, p.range, p.doc);
+  return out;
 }
 
 void bindInstanceMatrices(GLuint instanceBuffer, GLuint location, GLint firstInstance) {

@@ -7,6 +7,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <set>
 #include <span>
 #include <string>
 #include <vector>
@@ -20,6 +21,7 @@
 #include "common/error.h"
 #include "common/gl/device.h"
 #include "common/image.h"
+#include "common/json_fields.h"
 #include "common/tree.h"
 #include "common/views.h"
 
@@ -82,26 +84,42 @@ struct FrameContext {
 inline constexpr int kShadowMapUnit = 7;
 
 // A baked impostor written to disk: a folder with asset.json (header) and binary blobs/images.
-// Its size is the method's disk_bytes.
+// Its size is the method's disk_bytes. The header is written and read in parts, each a struct
+// listing its keys in visit() (common/json_fields.h): the description every asset has
+// (describe/readHeaderOf), shared parts (cloud levels, the wood) and the method's own. Reading is
+// strict: a missing key, a wrong type or a key no part reads (finishReading) is an InputError
+// naming asset.json, so a corrupt asset is bad input (exit 2), never an internal error.
 class AssetFolder {
  public:
   explicit AssetFolder(std::filesystem::path folder) : mFolder(std::move(folder)) {}
   const std::filesystem::path& folder() const { return mFolder; }
-  nlohmann::json& header() { return mHeader; }
+  std::string headerPath() const { return (mFolder / "asset.json").string(); }
+
+  // Starts the header every asset has: the method, its effective parameters, its bake report.
+  void describe(const std::string& method, const nlohmann::json& params,
+                const nlohmann::json& report);
+  template <typename Fields>
+  void writeFields(const Fields& fields) {
+    mHeader.update(canopy::writeFields(fields));
+  }
+  void writeHeader();
+
+  // Reads asset.json and checks it was written by `method`; returns its bake report.
+  nlohmann::json readHeaderOf(const std::string& method);
+  template <typename Fields>
+  void readFields(Fields& fields) {
+    JsonFieldReader reader(mHeader, headerPath());
+    fields.visit(reader);
+    mReadKeys.insert(reader.used().begin(), reader.used().end());
+  }
+  // InputError naming the first header key no part read.
+  void finishReading() const;
+
   void writeBlob(const std::string& name, const void* data, size_t bytes);
   template <typename T>
   void writeBlob(const std::string& name, const std::vector<T>& data) {
     writeBlob(name, data.data(), data.size() * sizeof(T));
   }
-  void writeImage(const std::string& name, const ImageRgba8& image);
-  void writeHeader();
-  // Starts the header every asset has: the method, its effective parameters, its bake report.
-  void describe(const std::string& method, const nlohmann::json& params,
-                const nlohmann::json& report);
-
-  void readHeader();
-  // Reads asset.json and checks it was written by `method`; InputError naming the folder otherwise.
-  void readHeaderOf(const std::string& method);
   std::vector<uint8_t> readBlob(const std::string& name) const;
   template <typename T>
   std::vector<T> readBlobAs(const std::string& name) const {
@@ -112,12 +130,19 @@ class AssetFolder {
     std::memcpy(values.data(), bytes.data(), bytes.size());
     return values;
   }
+
+  void writeImage(const std::string& name, const ImageRgba8& image);
   ImageRgba8 readImage(const std::string& name) const;
+  // A numbered list of images, named by `pattern` with "{}" for the index ("leaf_{}.png").
+  void writeImages(const std::string& pattern, const std::vector<ImageRgba8>& images);
+  std::vector<ImageRgba8> readImages(const std::string& pattern, size_t count) const;
+
   uint64_t sizeOnDisk() const;
 
  private:
   std::filesystem::path mFolder;
   nlohmann::json mHeader = nlohmann::json::object();
+  std::set<std::string> mReadKeys;
 };
 
 class Method {
@@ -172,7 +197,14 @@ struct MethodInfo {
   std::string description;  // one line, for --list-methods and docs
   MethodFactory create;
   MethodTraits traits;
+  std::vector<ParamDoc> parameters;  // from the Params struct's visit(): key, type, default, ...
 };
+
+// The method's parameters as a Markdown table (docs/METHODS.md holds one per method, between
+// "<!-- parameters:NAME -->" and "<!-- /parameters -->"; a test checks they match) and as text
+// for the terminal (--list-methods).
+std::string parameterTableMarkdown(const MethodInfo& info);
+std::string parameterTableText(const MethodInfo& info);
 
 class MethodRegistry {
  public:
@@ -194,7 +226,7 @@ void addMethod(MethodRegistry& registry, const std::string& name, std::string de
        [name](const nlohmann::json& params, const std::string& path) -> std::unique_ptr<Method> {
          return std::make_unique<MethodType>(readParams<Params>(params, path, name));
        },
-       std::move(traits)});
+       std::move(traits), describeParams<Params>()});
 }
 
 // The registry of every built-in method, filled by registry.cpp (one explicit call each).

@@ -19,29 +19,76 @@
 namespace canopy {
 namespace {
 
+// Each field is documented where visit() names it: that text is what --list-methods and
+// docs/METHODS.md show.
 struct BboxParams {
-  int textureSize = 64;  // texels per side of every box image, all levels (§3.2.3: 64 or 128)
-  float volumeRatio =
-      0.1f;  // §3.2.4: no images for a box below this fraction of its parent's volume
-  std::string arrangement = "cross";  // "cross" (Fig. 3) or "diagonal" (Fig. 6)
-  float transition = 0.25f;  // blend band beyond a box's LoD distance, as a fraction of it (0: pop)
-  std::string hierarchy = "auto";  // "auto", "branches" (the L-system's) or "spatial" (leaves only)
-  int minBoxLeaves = 16;           // no images for boxes holding fewer leaves (drawn as polygons)
-  int spatialLeaves = 200;         // spatial hierarchy: at most this many leaves per finest box
-  int supersample = 4;             // capture samples per texel side
-  bool drawWood = true;            // draw the trunk and branches as geometry
+  int textureSize = 64;
+  float volumeRatio = 0.1f;
+  std::string arrangement = "cross";
+  float transition = 0.25f;
+  std::string hierarchy = "auto";
+  int minBoxLeaves = 16;
+  int spatialLeaves = 200;
+  int supersample = 4;
+  bool drawWood = true;
 
   template <class Visitor>
   void visit(Visitor& v) {
-    v("texture_size", textureSize, 8, 1024);
-    v("volume_ratio", volumeRatio, 0.0f, 1.0f);
-    v("arrangement", arrangement, {"cross", "diagonal"});
-    v("transition", transition, 0.0f, 10.0f);
-    v("hierarchy", hierarchy, {"auto", "branches", "wood", "spatial"});
-    v("min_box_leaves", minBoxLeaves, 1, 1000000);
-    v("spatial_leaves", spatialLeaves, 1, 1000000);
-    v("supersample", supersample, 1, 8);
-    v("wood", drawWood);
+    v("texture_size", textureSize, 8, 1024,
+      "texels per side of every box image, all levels (§3.2.3: 64 or 128; the memory knob)");
+    v("volume_ratio", volumeRatio, 0.0f, 1.0f,
+      "no images for a box below this fraction of its parent's volume (§3.2.4)");
+    v("arrangement", arrangement, {"cross", "diagonal"},
+      "the six quads of a box: through its centre (Fig. 3) or on its diagonals (Fig. 6)");
+    v("transition", transition, 0.0f, 10.0f,
+      "blend band beyond a box's LoD distance, as a fraction of it (0: pop)");
+    v("hierarchy", hierarchy, {"auto", "branches", "wood", "spatial"},
+      "boxes from the L-system's branches, the wood mesh, or a spatial split of the leaves");
+    v("min_box_leaves", minBoxLeaves, 1, 1000000,
+      "no images for boxes holding fewer leaves (drawn as polygons)");
+    v("spatial_leaves", spatialLeaves, 1, 1000000,
+      "spatial hierarchy: at most this many leaves per finest box");
+    v("supersample", supersample, 1, 8, "capture samples per texel side");
+    v("wood", drawWood, "draw the trunk and branches as geometry");
+  }
+};
+
+// The asset header's own part: the hierarchy (nodes as the walk needs them) and its LoD data.
+struct NodeFields {
+  int32_t parent = -1;
+  std::vector<int32_t> children;
+  int level = 0;
+  Aabb box;
+  std::array<uint32_t, 3> leaves{};  // leafBegin, leafEnd, subtreeLeafEnd
+  bool textured = false;
+  template <class V>
+  void visit(V& v) {
+    v("parent", parent);
+    v("children", children);
+    v("level", level);
+    v("box", box);
+    v("leaves", leaves);
+    v("textured", textured);
+  }
+};
+
+struct AssetFields {
+  std::vector<NodeFields> nodes;
+  std::string source;  // where the boxes came from (branches, wood, spatial)
+  std::vector<int32_t> texturedOrder;
+  std::vector<uint32_t> boxFirstIndex;
+  std::vector<float> worldPerTexel;
+  uint32_t leafFirstIndex = 0;
+  size_t leafImages = 0;
+  template <class V>
+  void visit(V& v) {
+    v("nodes", nodes);
+    v("source", source);
+    v("textured_order", texturedOrder);
+    v("box_first_index", boxFirstIndex);
+    v("world_per_texel", worldPerTexel);
+    v("leaf_first_index", leafFirstIndex);
+    v("leaf_images", leafImages);
   }
 };
 
@@ -300,78 +347,85 @@ class BboxHierarchy final : public Method {
   nlohmann::json bakeReport() const override { return mReport; }
 
   void save(AssetFolder& asset) const override {
-    auto& header = asset.header();
     asset.describe("bbox_hierarchy", effectiveParams(), mReport);
-    nlohmann::json nodes = nlohmann::json::array();
+    AssetFields fields;
     for (const BoxNode& n : mHierarchy.nodes) {
-      nodes.push_back(
-          {{"parent", n.parent},
-           {"children", n.children},
-           {"level", n.level},
-           {"box", {n.box.min.x, n.box.min.y, n.box.min.z, n.box.max.x, n.box.max.y, n.box.max.z}},
-           {"leaves", {n.leafBegin, n.leafEnd, n.subtreeLeafEnd}},
-           {"textured", n.textured}});
+      fields.nodes.push_back({n.parent,
+                              n.children,
+                              n.level,
+                              n.box,
+                              {n.leafBegin, n.leafEnd, n.subtreeLeafEnd},
+                              n.textured});
     }
-    header["nodes"] = nodes;
-    header["source"] = mHierarchy.source;
-    header["textured_order"] = mTextured;
-    header["box_first_index"] = mBoxFirstIndex;
-    header["world_per_texel"] = mWorldPerTexel;
-    header["leaf_first_index"] = mLeafFirstIndex;
-    header["leaf_images"] = mLeafImages.size();
+    fields.source = mHierarchy.source;
+    fields.texturedOrder = mTextured;
+    fields.boxFirstIndex = mBoxFirstIndex;
+    fields.worldPerTexel = mWorldPerTexel;
+    fields.leafFirstIndex = mLeafFirstIndex;
+    fields.leafImages = mLeafImages.size();
+    asset.writeFields(fields);
     asset.writeBlob("vertices.bin", mVertices);
     asset.writeBlob("indices.bin", mIndices);
     asset.writeBlob("leaf_order.bin", mHierarchy.leafOrder);
     asset.writeImage("box_images.png", mAtlas);  // boxes in level order: coarse first (§6)
-    for (size_t i = 0; i < mLeafImages.size(); ++i)
-      asset.writeImage(fmt::format("leaf_{}.png", i), mLeafImages[i]);
+    asset.writeImages("leaf_{}.png", mLeafImages);
     mWood.save(asset);
     asset.writeHeader();
   }
 
   void load(AssetFolder& asset) override {
-    asset.readHeaderOf("bbox_hierarchy");
-    const auto& header = asset.header();
+    mReport = asset.readHeaderOf("bbox_hierarchy");
+    AssetFields fields;
+    asset.readFields(fields);
     const std::string folder = asset.folder().string();
-    mReport = header.at("report");
     mHierarchy = {};
-    mHierarchy.source = header.at("source");
-    for (const auto& n : header.at("nodes")) {
+    mHierarchy.source = fields.source;
+    for (const NodeFields& n : fields.nodes) {
       BoxNode node;
-      node.parent = n.at("parent");
-      node.children = n.at("children").get<std::vector<int32_t>>();
-      node.level = n.at("level");
-      const auto& b = n.at("box");
-      node.box.min = {b[0], b[1], b[2]};
-      node.box.max = {b[3], b[4], b[5]};
-      node.leafBegin = n.at("leaves")[0];
-      node.leafEnd = n.at("leaves")[1];
-      node.subtreeLeafEnd = n.at("leaves")[2];
-      node.textured = n.at("textured");
+      node.parent = n.parent;
+      node.children = n.children;
+      node.level = n.level;
+      node.box = n.box;
+      node.leafBegin = n.leaves[0];
+      node.leafEnd = n.leaves[1];
+      node.subtreeLeafEnd = n.leaves[2];
+      node.textured = n.textured;
       mHierarchy.nodes.push_back(std::move(node));
     }
-    mTextured = header.at("textured_order").get<std::vector<int32_t>>();
-    mBoxFirstIndex = header.at("box_first_index").get<std::vector<uint32_t>>();
-    mWorldPerTexel = header.at("world_per_texel").get<std::vector<float>>();
-    mLeafFirstIndex = header.at("leaf_first_index");
+    mTextured = fields.texturedOrder;
+    mBoxFirstIndex = fields.boxFirstIndex;
+    mWorldPerTexel = fields.worldPerTexel;
+    mLeafFirstIndex = fields.leafFirstIndex;
     mVertices = asset.readBlobAs<MeshVertex>("vertices.bin");
     mIndices = asset.readBlobAs<uint32_t>("indices.bin");
     mHierarchy.leafOrder = asset.readBlobAs<uint32_t>("leaf_order.bin");
     mAtlas = asset.readImage("box_images.png");
-    mLeafImages.clear();
-    for (size_t i = 0; i < header.at("leaf_images").get<size_t>(); ++i)
-      mLeafImages.push_back(asset.readImage(fmt::format("leaf_{}.png", i)));
+    mLeafImages = asset.readImages("leaf_{}.png", fields.leafImages);
     for (uint32_t index : mIndices) {
       if (index >= mVertices.size()) throwInputError("{}: corrupt indices", folder);
     }
-    if (mBoxFirstIndex.size() != mHierarchy.nodes.size() ||
-        mWorldPerTexel.size() != mHierarchy.nodes.size() || mLeafImages.empty()) {
-      throwInputError("{}: corrupt box hierarchy header", folder);
-    }
+    validateNodes(folder);
     mWood.load(asset);
+    asset.finishReading();
   }
 
  private:
+  // Every index the walk and the draws follow, checked so a corrupt asset cannot read past a
+  // buffer; InputError naming the folder.
+  void validateNodes(const std::string& folder) const {
+    const size_t nodes = mHierarchy.nodes.size(), leaves = mHierarchy.leafOrder.size();
+    bool valid = nodes > 0 && mBoxFirstIndex.size() == nodes && mWorldPerTexel.size() == nodes &&
+                 !mLeafImages.empty() && size_t(mLeafFirstIndex) + leaves * 6 <= mIndices.size();
+    for (size_t n = 0; valid && n < nodes; ++n) {
+      const BoxNode& node = mHierarchy.nodes[n];
+      valid = node.leafBegin <= node.leafEnd && node.leafEnd <= node.subtreeLeafEnd &&
+              node.subtreeLeafEnd <= leaves && node.parent < int32_t(nodes) &&
+              (!node.textured || size_t(mBoxFirstIndex[n]) + 36 <= mIndices.size());
+      for (int32_t child : node.children) valid = valid && child > 0 && size_t(child) < nodes;
+    }
+    if (!valid) throwInputError("{}: corrupt box hierarchy header", folder);
+  }
+
   // Walks one instance's hierarchy (Fig. 4) from its viewer position and adds its matrix to the
   // lists of what it draws; boxes within the transition band are drawn dissolved together with
   // the finer level, on complementary pixels.

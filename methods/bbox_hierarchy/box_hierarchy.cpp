@@ -228,7 +228,7 @@ BoxHierarchy woodHierarchy(const Tree& tree) {
     if (parentNode >= 0) hierarchy.nodes[parentNode].children.push_back(index);
     hierarchy.nodes.push_back(std::move(node));
     for (auto it = partChildren[p].rbegin(); it != partChildren[p].rend(); ++it)
-      stack.push_back({*it, index});
+      stack.emplace_back(*it, index);
   }
   // Subtree leaf ranges and boxes, bottom-up (children follow their parent in pre-order).
   for (size_t n = hierarchy.nodes.size(); n-- > 0;) {

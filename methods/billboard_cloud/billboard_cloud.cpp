@@ -4,6 +4,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <utility>
+
 #include "common/config.h"
 #include "methods/common/billboard_cloud.h"
 #include "methods/common/cloud_levels.h"
@@ -16,24 +18,28 @@
 namespace canopy {
 namespace {
 
+// Each field is documented where visit() names it: that text is what --list-methods and
+// docs/METHODS.md show.
 struct BillboardCloudParams {
   CloudParams cloud;
-  float density = 32.0f;             // texels per unit length of billboard (the memory knob)
-  int supersample = 4;               // capture samples per texel side
-  int maxBillboardTexels = 1024;     // cap on one billboard's texture side
-  bool mipmaps = true;               // mipmapped atlas (trilinear, coverage-preserving levels)
-  bool drawWood = true;              // draw the trunk and branches as geometry
-  std::string compression = "none";  // the atlas: "none", "dxt1" (BC1) or "dxt5" (BC3)
+  float density = 32.0f;
+  int supersample = 4;
+  int maxBillboardTexels = 1024;
+  bool mipmaps = true;
+  bool drawWood = true;
+  std::string compression = "none";
 
   template <class Visitor>
   void visit(Visitor& v) {
     cloud.visit(v);
-    v("density", density, 0.01f, 100000.0f);
-    v("supersample", supersample, 1, 8);
-    v("max_billboard_texels", maxBillboardTexels, 1, 8192);
-    v("mipmaps", mipmaps);
-    v("wood", drawWood);
-    v("compression", compression, {"none", "dxt1", "dxt5"});
+    v("density", density, 0.01f, 100000.0f,
+      "texels per unit length of billboard side (the memory knob)");
+    v("supersample", supersample, 1, 8, "capture samples per texel side");
+    v("max_billboard_texels", maxBillboardTexels, 1, 8192, "cap on one billboard's texture side");
+    v("mipmaps", mipmaps, "mipmapped atlas (trilinear, coverage-preserving levels)");
+    v("wood", drawWood, "draw the trunk and branches as geometry");
+    v("compression", compression, {"none", "dxt1", "dxt5"},
+      "the atlas: uncompressed, BC1 or BC3 (S3TC)");
   }
 };
 
@@ -42,7 +48,7 @@ constexpr int kAtlasAlignment = 8;
 
 class BillboardCloudMethod final : public Method {
  public:
-  explicit BillboardCloudMethod(BillboardCloudParams params) : mParams(params) {
+  explicit BillboardCloudMethod(BillboardCloudParams params) : mParams(std::move(params)) {
     mParams.cloud.validate("billboard_cloud");
   }
 
@@ -64,7 +70,7 @@ class BillboardCloudMethod final : public Method {
           return std::clamp(static_cast<int>(std::ceil(2.0f * halfExtent * mParams.density)), 1,
                             mParams.maxBillboardTexels);
         };
-        sizes.push_back({texels(billboard.halfExtents.x), texels(billboard.halfExtents.y)});
+        sizes.emplace_back(texels(billboard.halfExtents.x), texels(billboard.halfExtents.y));
       }
     }
     const AtlasLayout preview = packAtlas(sizes, kAtlasPadding, kAtlasAlignment);
@@ -130,9 +136,8 @@ class BillboardCloudMethod final : public Method {
   nlohmann::json bakeReport() const override { return mReport; }
 
   void save(AssetFolder& asset) const override {
-    auto& header = asset.header();
     asset.describe("billboard_cloud", effectiveParams(), mReport);
-    mLevels.save(header);
+    mLevels.save(asset);
     asset.writeBlob("vertices.bin", mVertices);
     asset.writeBlob("indices.bin", mIndices);
     asset.writeImage("atlas.png", mAtlas);
@@ -141,15 +146,14 @@ class BillboardCloudMethod final : public Method {
   }
 
   void load(AssetFolder& asset) override {
-    asset.readHeaderOf("billboard_cloud");
-    const auto& header = asset.header();
-    mReport = header.at("report");
+    mReport = asset.readHeaderOf("billboard_cloud");
     mVertices = asset.readBlobAs<MeshVertex>("vertices.bin");
     mIndices = asset.readBlobAs<uint32_t>("indices.bin");
     mAtlas = asset.readImage("atlas.png");
     mWood.load(asset);
     validateIndices(mIndices, mVertices.size(), asset.folder().string());
-    mLevels.load(header, mIndices.size(), asset.folder().string());
+    mLevels.load(asset, mIndices.size());
+    asset.finishReading();
   }
 
  private:

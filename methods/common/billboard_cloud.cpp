@@ -91,7 +91,7 @@ glm::vec3 anyPerpendicular(const glm::vec3& n) {
 
 }  // namespace
 
-Rectangle2D minimumAreaRectangle(std::vector<glm::vec2> points) {
+Rectangle2D minimumAreaRectangle(const std::vector<glm::vec2>& points) {
   std::vector<glm::dvec2> input;
   input.reserve(points.size());
   for (const glm::vec2& p : points) input.emplace_back(p);

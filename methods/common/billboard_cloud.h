@@ -68,6 +68,6 @@ struct Rectangle2D {
   glm::vec2 axis{1.0f, 0.0f};
   glm::vec2 halfExtents{0.0f};
 };
-Rectangle2D minimumAreaRectangle(std::vector<glm::vec2> points);
+Rectangle2D minimumAreaRectangle(const std::vector<glm::vec2>& points);
 
 }  // namespace canopy

@@ -1,5 +1,7 @@
 #include "methods/common/cloud_levels.h"
 
+#include <array>
+
 #include "common/error.h"
 #include "methods/method.h"
 
@@ -25,23 +27,36 @@ void CloudLevels::draw(const LodInstances& lod,
   }
 }
 
-void CloudLevels::save(nlohmann::json& header) const {
-  header["bounds"] = {treeBounds.min.x, treeBounds.min.y, treeBounds.min.z,
-                      treeBounds.max.x, treeBounds.max.y, treeBounds.max.z};
-  header["levels"] = nlohmann::json::array();
-  for (const Range& r : ranges) header["levels"].push_back({r.first, r.count});
+namespace {
+
+// The header part: the tree bounds and each level's (first index, index count).
+struct LevelFields {
+  Aabb bounds;
+  std::vector<std::array<uint32_t, 2>> levels;
+  template <class V>
+  void visit(V& v) {
+    v("bounds", bounds);
+    v("levels", levels);
+  }
+};
+
+}  // namespace
+
+void CloudLevels::save(AssetFolder& asset) const {
+  LevelFields fields{treeBounds, {}};
+  for (const Range& r : ranges) fields.levels.push_back({r.first, r.count});
+  asset.writeFields(fields);
 }
 
-void CloudLevels::load(const nlohmann::json& header, size_t indexCount, const std::string& folder) {
-  const auto& b = header.at("bounds");
-  treeBounds.min = {b[0], b[1], b[2]};
-  treeBounds.max = {b[3], b[4], b[5]};
+void CloudLevels::load(AssetFolder& asset, size_t indexCount) {
+  LevelFields fields;
+  asset.readFields(fields);
+  treeBounds = fields.bounds;
   ranges.clear();
-  for (const auto& r : header.at("levels")) {
-    ranges.push_back({r[0], r[1]});
-    if (size_t(ranges.back().first) + ranges.back().count > indexCount) {
-      throwInputError("{}: level ranges point past the indices", folder);
-    }
+  for (const auto& [first, count] : fields.levels) {
+    ranges.push_back({first, count});
+    if (size_t(first) + count > indexCount)
+      throwInputError("{}: level ranges point past the indices", asset.folder().string());
   }
 }
 

@@ -9,6 +9,7 @@
 
 #include "common/tree.h"
 #include "methods/common/lod_instances.h"
+#include "methods/method.h"
 
 namespace canopy {
 
@@ -28,9 +29,10 @@ struct CloudLevels {
   // before a level's draw (to switch programs), the instance matrices go to locations 4–7.
   void draw(const LodInstances& lod, const std::function<void(size_t level)>& prepare) const;
 
-  void save(nlohmann::json& header) const;
-  // Reads what save wrote and checks it against the index buffer; InputError naming `folder`.
-  void load(const nlohmann::json& header, size_t indexCount, const std::string& folder);
+  // The asset header's "bounds" and "levels".
+  void save(AssetFolder& asset) const;
+  // Reads what save wrote and checks it against the index buffer; InputError naming the asset.
+  void load(AssetFolder& asset, size_t indexCount);
 };
 
 // InputError naming `folder` when an index points past the vertices.

@@ -7,24 +7,30 @@
 
 namespace canopy {
 
-// Parameters every billboard-cloud method shares: the clustering and the geometric LoD.
+// Parameters every billboard-cloud method shares: the clustering and the geometric LoD (three
+// clouds of K, K/3, K/10 billboards, switched per instance by the tree's projected size in
+// output pixels, the bounding radius as FrameContext::projectedPixels measures it). Each field is
+// documented where visit() names it.
 struct CloudParams {
   ClusteringParams clustering;
-  // Three clouds of K, K/3, K/10 billboards, switched per instance by the tree's projected size
-  // in output pixels (the bounding radius as FrameContext::projectedPixels measures it).
   bool lod = true;
-  float lodNearPixels = 120.0f;  // the K cloud while the radius spans at least this many pixels
-  float lodFarPixels = 35.0f;    // the K/10 cloud below this; K/3 in between
+  float lodNearPixels = 120.0f;
+  float lodFarPixels = 35.0f;
 
   template <class Visitor>
   void visit(Visitor& v) {
-    v("clusters", clustering.clusters, 1, 100000);
-    v("orientation_weight", clustering.orientationWeight, 0.0f, 1000.0f);
-    v("compactness_weight", clustering.compactnessWeight, 0.0f, 1000.0f);
-    v("cluster_iterations", clustering.iterations, 1, 1000);
-    v("lod", lod);
-    v("lod_near_px", lodNearPixels, 0.01f, 100000.0f);
-    v("lod_far_px", lodFarPixels, 0.01f, 100000.0f);
+    v("clusters", clustering.clusters, 1, 100000, "K, billboards of the finest cloud");
+    v("orientation_weight", clustering.orientationWeight, 0.0f, 1000.0f,
+      "clustering: weight of the leaf-orientation term");
+    v("compactness_weight", clustering.compactnessWeight, 0.0f, 1000.0f,
+      "clustering: weight of the locality term");
+    v("cluster_iterations", clustering.iterations, 1, 1000,
+      "clustering: assignment/refit rounds at most (stops when stable)");
+    v("lod", lod, "three clouds of K, K/3, K/10 billboards switched by projected size (§6)");
+    v("lod_near_px", lodNearPixels, 0.01f, 100000.0f,
+      "the K cloud while the tree's bounding radius spans at least this many output pixels");
+    v("lod_far_px", lodFarPixels, 0.01f, 100000.0f,
+      "the K/10 cloud below this projected radius (output pixels); K/3 in between");
   }
 
   std::vector<int> divisors() const {

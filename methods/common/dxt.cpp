@@ -15,7 +15,7 @@ Compression parseCompression(const std::string& name) {
   if (name == "none") return Compression::kNone;
   if (name == "dxt1") return Compression::kDxt1;
   if (name == "dxt5") return Compression::kDxt5;
-  throwInputError("parameter 'compression' = '{}' must be \"none\", \"dxt1\" or \"dxt5\"", name);
+  throwInputError(R"(parameter 'compression' = '{}' must be "none", "dxt1" or "dxt5")", name);
 }
 
 bool driverHasS3tc() {

@@ -196,7 +196,7 @@ glm::vec2 ImageAtlas::cornerUv(size_t index, int corner) const {
 
 ImageAtlas composeAtlas(const std::vector<ImageRgba8>& images, int padding, int alignment) {
   ImageAtlas atlas;
-  for (const ImageRgba8& image : images) atlas.sizes.push_back({image.width, image.height});
+  for (const ImageRgba8& image : images) atlas.sizes.emplace_back(image.width, image.height);
   atlas.layout = packAtlas(atlas.sizes, padding, alignment);
   atlas.image = ImageRgba8(atlas.layout.width, atlas.layout.height);
   for (size_t i = 0; i < images.size(); ++i) {

@@ -19,6 +19,13 @@ namespace canopy {
 struct OrientationBins {
   int rotations = 8;  // in-plane angle steps over 360°
   int tilts = 2;      // foreshortening steps over (0, 1]; the width of bin j is (j + 1) / tilts
+
+  // As method parameters (config keys "rotations", "tilts").
+  template <class Visitor>
+  void visit(Visitor& v) {
+    v("rotations", rotations, 1, 64, "Leaves Texture: in-plane angle steps over 360°");
+    v("tilts", tilts, 1, 8, "Leaves Texture: foreshortening steps over (0, 1]");
+  }
 };
 
 // Image index of a leaf on a billboard: ((texture·2 + back)·tilts + tilt)·rotations + rotation.

@@ -1,6 +1,7 @@
 #include "methods/common/mesh.h"
 
 #include <algorithm>
+#include <array>
 #include <numeric>
 
 #include <fmt/format.h>
@@ -107,20 +108,51 @@ void WoodRenderer::draw(const FrameContext& frame, size_t instances) const {
   g.BindVertexArray(0);
 }
 
+namespace {
+
+// The header part "wood": the materials and how many textures the wood_<i>.png files hold.
+struct WoodMaterialFields {
+  std::string name;
+  std::array<float, 4> baseColor{};
+  int texture = -1;
+  template <class V>
+  void visit(V& v) {
+    v("name", name);
+    v("base_color", baseColor);
+    v("texture", texture);
+  }
+};
+
+struct WoodFields {
+  struct Wood {
+    std::vector<WoodMaterialFields> materials;
+    size_t textures = 0;
+    template <class V>
+    void visit(V& v) {
+      v("materials", materials);
+      v("textures", textures);
+    }
+  } wood;
+  template <class V>
+  void visit(V& v) {
+    v("wood", wood);
+  }
+};
+
+}  // namespace
+
 void WoodRenderer::save(AssetFolder& asset) const {
   asset.writeBlob("wood_vertices.bin", mVertices);
   asset.writeBlob("wood_indices.bin", mIndices);
   asset.writeBlob("wood_ranges.bin", mRanges);
-  nlohmann::json materials = nlohmann::json::array();
+  WoodFields fields;
   for (const WoodMaterial& m : mMaterials) {
-    materials.push_back(
-        {{"name", m.name},
-         {"base_color", {m.baseColor.r, m.baseColor.g, m.baseColor.b, m.baseColor.a}},
-         {"texture", m.texture}});
+    fields.wood.materials.push_back(
+        {m.name, {m.baseColor.r, m.baseColor.g, m.baseColor.b, m.baseColor.a}, m.texture});
   }
-  for (size_t i = 0; i < mTextures.size(); ++i)
-    asset.writeImage(fmt::format("wood_{}.png", i), mTextures[i]);
-  asset.header()["wood"] = {{"materials", materials}, {"textures", mTextures.size()}};
+  fields.wood.textures = mTextures.size();
+  asset.writeImages("wood_{}.png", mTextures);
+  asset.writeFields(fields);
 }
 
 void WoodRenderer::load(AssetFolder& asset) {
@@ -128,15 +160,14 @@ void WoodRenderer::load(AssetFolder& asset) {
   mVertices = asset.readBlobAs<MeshVertex>("wood_vertices.bin");
   mIndices = asset.readBlobAs<uint32_t>("wood_indices.bin");
   mRanges = asset.readBlobAs<Range>("wood_ranges.bin");
-  const auto& wood = asset.header().at("wood");
+  WoodFields fields;
+  asset.readFields(fields);
   mMaterials.clear();
-  for (const auto& m : wood.at("materials")) {
-    const auto& c = m.at("base_color");
-    mMaterials.push_back({m.at("name"), glm::vec4(c[0], c[1], c[2], c[3]), m.at("texture")});
+  for (const WoodMaterialFields& m : fields.wood.materials) {
+    const auto& c = m.baseColor;
+    mMaterials.push_back({m.name, glm::vec4(c[0], c[1], c[2], c[3]), m.texture});
   }
-  mTextures.clear();
-  for (size_t i = 0; i < wood.at("textures").get<size_t>(); ++i)
-    mTextures.push_back(asset.readImage(fmt::format("wood_{}.png", i)));
+  mTextures = asset.readImages("wood_{}.png", fields.wood.textures);
   for (const Range& r : mRanges) {
     if (size_t(r.first) + r.count > mIndices.size() || r.material >= mMaterials.size()) {
       throwInputError("{}: corrupt wood ranges", folder);

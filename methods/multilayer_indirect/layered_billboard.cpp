@@ -14,7 +14,7 @@ namespace canopy {
 SpriteRule parseSpriteRule(const std::string& name) {
   if (name == "paper") return SpriteRule::kPaper;
   if (name == "bounds") return SpriteRule::kBounds;
-  throwInputError("parameter 'sprite' = '{}' must be \"paper\" or \"bounds\"", name);
+  throwInputError(R"(parameter 'sprite' = '{}' must be "paper" or "bounds")", name);
 }
 
 uint32_t otherSideImage(uint32_t image, const OrientationBins& bins) {

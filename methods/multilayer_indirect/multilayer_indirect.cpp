@@ -16,40 +16,45 @@
 namespace canopy {
 namespace {
 
+// Each field is documented where visit() names it: that text is what --list-methods and
+// docs/METHODS.md show.
 struct MultilayerParams {
   CloudParams cloud;
-  int hashResolution = 32;       // hash cells along each billboard's longer side
-  int maxLayers = 16;            // longest list kept per cell (front-most first); at most 255
-  std::string sprite = "paper";  // point-sprite size: "paper" (§4.2 formula) or "bounds"
-  OrientationBins bins;          // quantized orientations of the Leaves Texture
-  int leafImageSize = 64;        // texels per side of each oriented leaf image
-  float lodFactor = 1.0f;        // shader LoD: entries = factor × hash-texel diagonal (px); 0: all
-  int lowResTexelsPerCell = 1;   // low-resolution texture texels per hash cell side
-  bool ambientOcclusion = true;  // §5.2: Embree AO of the polygonal tree at sprite corners (lit)
-  int aoRays = 32;               // rays per leaf corner for the ambient occlusion
-  std::string compression = "none";  // colour textures: "none", "dxt1" (BC1) or "dxt5" (BC3)
-  // Lists Texture entries: "float16" (RGBA16F, positions on the billboard plane) or "8bit"
-  // (RGBA8: position relative to its hash cell and size, both quantized; AO in 4 bits a corner),
-  // half the memory of the lists and of the AO, for the paper's Table 1 budgets.
+  int hashResolution = 32;
+  int maxLayers = 16;
+  std::string sprite = "paper";
+  OrientationBins bins;
+  int leafImageSize = 64;
+  float lodFactor = 1.0f;
+  int lowResTexelsPerCell = 1;
+  bool ambientOcclusion = true;
+  int aoRays = 32;
+  std::string compression = "none";
   std::string listsPrecision = "float16";
-  bool drawWood = true;  // draw the trunk and branches as geometry
+  bool drawWood = true;
 
   template <class Visitor>
   void visit(Visitor& v) {
     cloud.visit(v);
-    v("hash_resolution", hashResolution, 1, 1024);
-    v("max_layers", maxLayers, 1, 255);
-    v("sprite", sprite, {"paper", "bounds"});
-    v("rotations", bins.rotations, 1, 64);
-    v("tilts", bins.tilts, 1, 8);
-    v("leaf_image_size", leafImageSize, 4, 512);
-    v("lod_factor", lodFactor, 0.0f, 1000.0f);
-    v("lowres_texels_per_cell", lowResTexelsPerCell, 1, 16);
-    v("ambient_occlusion", ambientOcclusion);
-    v("ao_rays", aoRays, 1, 4096);
-    v("compression", compression, {"none", "dxt1", "dxt5"});
-    v("lists_precision", listsPrecision, {"float16", "8bit"});
-    v("wood", drawWood);
+    v("hash_resolution", hashResolution, 1, 1024,
+      "hash cells along each billboard's longer side (the memory knob)");
+    v("max_layers", maxLayers, 1, 255, "longest list kept per cell (front-most first)");
+    v("sprite", sprite, {"paper", "bounds"}, "point-sprite size: the §4.2 formula or the bounds");
+    bins.visit(v);
+    v("leaf_image_size", leafImageSize, 4, 512, "texels per side of each oriented leaf image");
+    v("lod_factor", lodFactor, 0.0f, 1000.0f,
+      "shader LoD: list entries walked = factor × projected hash-texel diagonal (px); 0: all");
+    v("lowres_texels_per_cell", lowResTexelsPerCell, 1, 16,
+      "low-resolution texture texels per hash cell side");
+    v("ambient_occlusion", ambientOcclusion,
+      "Embree AO of the polygonal tree at sprite corners, for lit frames (§5.2)");
+    v("ao_rays", aoRays, 1, 4096, "rays per leaf corner for the ambient occlusion");
+    v("compression", compression, {"none", "dxt1", "dxt5"},
+      "colour textures: uncompressed, BC1 or BC3 (S3TC)");
+    v("lists_precision", listsPrecision, {"float16", "8bit"},
+      "Lists Texture entries: RGBA16F positions, or RGBA8 cell-relative positions and sizes "
+      "with 4-bit AO (half the memory; the paper's Table 1 budgets)");
+    v("wood", drawWood, "draw the trunk and branches as geometry");
   }
 };
 
@@ -61,6 +66,25 @@ struct Vertex {
   glm::ivec4 hash;     // first cell in the hash atlas, cells
   glm::vec2 halfExtents;
   glm::vec3 tangent;  // the billboard's axisU: with the normal, the frame leaf normals live in
+};
+
+// The asset header's own part.
+struct AssetFields {
+  glm::ivec2 hashSize{0};
+  int listsHeight = 0;
+  size_t leafImages = 0;
+  float positionRange = 0.0f;  // 8-bit lists: the cell-relative position range
+  float maxSpriteSize = 0.0f;  // 8-bit lists: the size quantization's top
+  bool lowResOcclusion = false;
+  template <class V>
+  void visit(V& v) {
+    v("hash_size", hashSize);
+    v("lists_height", listsHeight);
+    v("leaf_images", leafImages);
+    v("position_range", positionRange);
+    v("max_sprite_size", maxSpriteSize);
+    v("lowres_occlusion", lowResOcclusion);
+  }
 };
 
 constexpr int kListsWidth = 2048;
@@ -296,14 +320,10 @@ class MultilayerIndirect final : public Method {
   nlohmann::json bakeReport() const override { return mReport; }
 
   void save(AssetFolder& asset) const override {
-    auto& header = asset.header();
     asset.describe("multilayer_indirect", effectiveParams(), mReport);
-    mLevels.save(header);
-    header["hash_size"] = {mHashSize.x, mHashSize.y};
-    header["lists_height"] = mListsHeight;
-    header["leaf_images"] = mLeafImages.size();
-    header["position_range"] = mPositionRange;
-    header["max_sprite_size"] = mMaxSpriteSize;
+    mLevels.save(asset);
+    asset.writeFields(AssetFields{mHashSize, mListsHeight, mLeafImages.size(), mPositionRange,
+                                  mMaxSpriteSize, !mLowResOcclusion.empty()});
     // What the GPU holds is what is stored: the 8-bit lists replace the float ones on disk too.
     if (packed()) {
       asset.writeBlob("lists_8bit.bin", mListsPacked);
@@ -315,27 +335,25 @@ class MultilayerIndirect final : public Method {
     asset.writeBlob("vertices.bin", mVertices);
     asset.writeBlob("indices.bin", mIndices);
     asset.writeBlob("hash.bin", mHash);
-    for (size_t i = 0; i < mLeafImages.size(); ++i)
-      asset.writeImage(fmt::format("leaf_image_{}.png", i), mLeafImages[i]);
+    asset.writeImages("leaf_image_{}.png", mLeafImages);
     asset.writeImage("lowres.png", mLowRes);
-    header["lowres_occlusion"] = !mLowResOcclusion.empty();
     if (!mLowResOcclusion.empty()) asset.writeImage("lowres_occlusion.png", mLowResOcclusion);
     mWood.save(asset);
     asset.writeHeader();
   }
 
   void load(AssetFolder& asset) override {
-    asset.readHeaderOf("multilayer_indirect");
-    const auto& header = asset.header();
+    mReport = asset.readHeaderOf("multilayer_indirect");
+    AssetFields fields;
+    asset.readFields(fields);
     const std::string folder = asset.folder().string();
-    mReport = header.at("report");
-    mHashSize = {header.at("hash_size")[0], header.at("hash_size")[1]};
-    mListsHeight = header.at("lists_height");
+    mHashSize = fields.hashSize;
+    mListsHeight = fields.listsHeight;
     mVertices = asset.readBlobAs<Vertex>("vertices.bin");
     mIndices = asset.readBlobAs<uint32_t>("indices.bin");
     mHash = asset.readBlobAs<uint32_t>("hash.bin");
-    mPositionRange = header.at("position_range");
-    mMaxSpriteSize = header.at("max_sprite_size");
+    mPositionRange = fields.positionRange;
+    mMaxSpriteSize = fields.maxSpriteSize;
     if (packed()) {
       mListsPacked = asset.readBlobAs<uint8_t>("lists_8bit.bin");
       mAmbientPacked = asset.readBlobAs<uint16_t>("ambient_4bit.bin");
@@ -349,14 +367,12 @@ class MultilayerIndirect final : public Method {
       mLists = asset.readBlobAs<float>("lists.bin");
       mAmbient = asset.readBlobAs<uint8_t>("ambient.bin");
     }
-    mLeafImages.clear();
-    for (size_t i = 0; i < header.at("leaf_images").get<size_t>(); ++i)
-      mLeafImages.push_back(asset.readImage(fmt::format("leaf_image_{}.png", i)));
+    mLeafImages = asset.readImages("leaf_image_{}.png", fields.leafImages);
     mLowRes = asset.readImage("lowres.png");
-    mLowResOcclusion = header.value("lowres_occlusion", false)
-                           ? asset.readImage("lowres_occlusion.png")
-                           : ImageRgba8();
-    if (mHash.size() != size_t(mHashSize.x) * mHashSize.y ||
+    mLowResOcclusion =
+        fields.lowResOcclusion ? asset.readImage("lowres_occlusion.png") : ImageRgba8();
+    if (mHashSize.x < 0 || mHashSize.y < 0 || mListsHeight < 1 ||
+        mHash.size() != size_t(mHashSize.x) * mHashSize.y ||
         mLists.size() != size_t(kListsWidth) * mListsHeight * 4) {
       throwInputError("{}: hash or lists blob has the wrong size", folder);
     }
@@ -370,8 +386,9 @@ class MultilayerIndirect final : public Method {
         throwInputError("{}: list entry names a missing leaf image", folder);
     }
     validateIndices(mIndices, mVertices.size(), asset.folder().string());
-    mLevels.load(header, mIndices.size(), asset.folder().string());
+    mLevels.load(asset, mIndices.size());
     mWood.load(asset);
+    asset.finishReading();
   }
 
  private:

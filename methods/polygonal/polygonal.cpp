@@ -11,21 +11,22 @@
 namespace canopy {
 namespace {
 
+// Each field is documented where visit() names it: that text is what --list-methods and
+// docs/METHODS.md show.
 struct PolygonalParams {
-  bool drawWood = true;  // draw the trunk and branches (false: leaves only)
-  bool mipmaps = true;   // mipmapped leaf textures (trilinear) as a real engine would draw them
-  // Lit runs: the leaves' ambient term scaled by Embree AO at their corners, computed exactly as
-  // the impostors bake theirs (methods/common/ambient_occlusion), so a lit comparison does not
-  // count AO as error. Baked only for lit runs with views.ambient_occlusion on.
+  bool drawWood = true;
+  bool mipmaps = true;
   bool ambientOcclusion = true;
-  int aoRays = 32;  // rays per leaf corner (multilayer_indirect's default)
+  int aoRays = 32;
 
   template <class Visitor>
   void visit(Visitor& v) {
-    v("wood", drawWood);
-    v("mipmaps", mipmaps);
-    v("ambient_occlusion", ambientOcclusion);
-    v("ao_rays", aoRays, 1, 4096);
+    v("wood", drawWood, "draw the trunk and branches (false: leaves only)");
+    v("mipmaps", mipmaps, "mipmapped leaf textures (trilinear), as a real engine draws them");
+    v("ambient_occlusion", ambientOcclusion,
+      "lit runs: the leaves' ambient term scaled by the Embree AO the impostors bake "
+      "(methods/common/ambient_occlusion), so AO is not counted as error");
+    v("ao_rays", aoRays, 1, 4096, "rays per leaf corner (multilayer_indirect's default)");
   }
 };
 
@@ -34,6 +35,15 @@ struct LeafRange {
   uint32_t first = 0;
   uint32_t count = 0;
   uint32_t texture = 0;
+};
+
+// The asset header's own part.
+struct AssetFields {
+  size_t leafTextures = 0;
+  template <class V>
+  void visit(V& v) {
+    v("leaf_textures", leafTextures);
+  }
 };
 
 class Polygonal final : public Method {
@@ -70,7 +80,7 @@ class Polygonal final : public Method {
     }
     mLeafImages.clear();
     for (const LeafTexture& texture : tree.leafTextures)
-      mLeafImages.push_back({texture.front, texture.back});
+      mLeafImages.emplace_back(texture.front, texture.back);
   }
 
   void upload(gl::Device& device) override {
@@ -138,24 +148,24 @@ class Polygonal final : public Method {
   nlohmann::json effectiveParams() const override { return writeParams(mParams); }
 
   void save(AssetFolder& asset) const override {
-    auto& header = asset.header();
     asset.describe("polygonal", effectiveParams(), nlohmann::json::object());
     asset.writeBlob("leaf_vertices.bin", mVertices);
     asset.writeBlob("leaf_indices.bin", mIndices);
     asset.writeBlob("leaf_ranges.bin", mRanges);
     asset.writeBlob("leaf_occlusion.bin", mOcclusion);
-    for (size_t i = 0; i < mLeafImages.size(); ++i) {
-      asset.writeImage(fmt::format("leaf_{}_front.png", i), mLeafImages[i].first);
-      asset.writeImage(fmt::format("leaf_{}_back.png", i), mLeafImages[i].second);
-    }
-    header["leaf_textures"] = mLeafImages.size();
+    std::vector<ImageRgba8> fronts, backs;
+    for (const auto& [front, back] : mLeafImages) fronts.push_back(front), backs.push_back(back);
+    asset.writeImages("leaf_{}_front.png", fronts);
+    asset.writeImages("leaf_{}_back.png", backs);
+    asset.writeFields(AssetFields{mLeafImages.size()});
     mWood.save(asset);
     asset.writeHeader();
   }
 
   void load(AssetFolder& asset) override {
     asset.readHeaderOf("polygonal");
-    const auto& header = asset.header();
+    AssetFields fields;
+    asset.readFields(fields);
     const std::string folder = asset.folder().string();
     mVertices = asset.readBlobAs<MeshVertex>("leaf_vertices.bin");
     mIndices = asset.readBlobAs<uint32_t>("leaf_indices.bin");
@@ -163,11 +173,10 @@ class Polygonal final : public Method {
     mOcclusion = asset.readBlobAs<float>("leaf_occlusion.bin");
     if (!mOcclusion.empty() && mOcclusion.size() != mVertices.size())
       throwInputError("{}: leaf occlusion does not match the leaf vertices", folder);
+    const auto fronts = asset.readImages("leaf_{}_front.png", fields.leafTextures);
+    const auto backs = asset.readImages("leaf_{}_back.png", fields.leafTextures);
     mLeafImages.clear();
-    for (size_t i = 0; i < header.at("leaf_textures").get<size_t>(); ++i) {
-      mLeafImages.push_back({asset.readImage(fmt::format("leaf_{}_front.png", i)),
-                             asset.readImage(fmt::format("leaf_{}_back.png", i))});
-    }
+    for (size_t i = 0; i < fronts.size(); ++i) mLeafImages.emplace_back(fronts[i], backs[i]);
     for (const LeafRange& r : mRanges) {
       if (size_t(r.first) + r.count > mIndices.size() || r.texture >= mLeafImages.size()) {
         throwInputError("{}: corrupt leaf ranges", folder);
@@ -177,6 +186,7 @@ class Polygonal final : public Method {
       if (i >= mVertices.size()) throwInputError("{}: corrupt leaf indices", folder);
     }
     mWood.load(asset);
+    asset.finishReading();
   }
 
  private:

@@ -12,23 +12,25 @@
 namespace canopy {
 namespace {
 
+// Each field is documented where visit() names it: that text is what --list-methods and
+// docs/METHODS.md show.
 struct SingleLeafParams {
   CloudParams cloud;
-  float cellSize = 1.0f;   // grid cell side, in mean leaf lengths (the grid resolution)
-  int maxCells = 1024;     // cap on cells per billboard side
-  OrientationBins bins;    // quantized orientations of the Leaves Texture
-  int leafImageSize = 64;  // texels per side of each oriented leaf image
-  bool drawWood = true;    // draw the trunk and branches as geometry
+  float cellSize = 1.0f;
+  int maxCells = 1024;
+  OrientationBins bins;
+  int leafImageSize = 64;
+  bool drawWood = true;
 
   template <class Visitor>
   void visit(Visitor& v) {
     cloud.visit(v);
-    v("cell_size", cellSize, 0.05f, 100.0f);
-    v("max_cells", maxCells, 1, 4096);
-    v("rotations", bins.rotations, 1, 64);
-    v("tilts", bins.tilts, 1, 8);
-    v("leaf_image_size", leafImageSize, 4, 512);
-    v("wood", drawWood);
+    v("cell_size", cellSize, 0.05f, 100.0f,
+      "grid cell side in mean leaf lengths (the grid resolution; the memory knob)");
+    v("max_cells", maxCells, 1, 4096, "cap on cells per billboard side");
+    bins.visit(v);
+    v("leaf_image_size", leafImageSize, 4, 512, "texels per side of each oriented leaf image");
+    v("wood", drawWood, "draw the trunk and branches as geometry");
   }
 };
 
@@ -37,6 +39,17 @@ struct Vertex {
   glm::vec3 normal;
   glm::vec2 uv;     // over the billboard
   glm::ivec4 grid;  // first cell in the index atlas, cells
+};
+
+// The asset header's own part.
+struct AssetFields {
+  glm::ivec2 indexSize{0};  // the cell index atlas
+  size_t leafImages = 0;
+  template <class V>
+  void visit(V& v) {
+    v("index_size", indexSize);
+    v("leaf_images", leafImages);
+  }
 };
 
 class SingleLeafIndirect final : public Method {
@@ -67,6 +80,7 @@ class SingleLeafIndirect final : public Method {
       for (const Billboard& billboard : cloud.billboards) billboards.push_back(&billboard);
     }
     std::vector<glm::ivec2> sizes;
+    sizes.reserve(grids.size());
     for (const SingleLeafGrid& grid : grids) sizes.push_back(grid.cells);
     const AtlasLayout layout = packAtlas(sizes, 0, 1);
     if (layout.width > 16384 || layout.height > 16384) {
@@ -173,32 +187,27 @@ class SingleLeafIndirect final : public Method {
   nlohmann::json bakeReport() const override { return mReport; }
 
   void save(AssetFolder& asset) const override {
-    auto& header = asset.header();
     asset.describe("single_leaf_indirect", effectiveParams(), mReport);
-    mLevels.save(header);
-    header["index_size"] = {mIndexSize.x, mIndexSize.y};
-    header["leaf_images"] = mLeafImages.size();
+    mLevels.save(asset);
+    asset.writeFields(AssetFields{mIndexSize, mLeafImages.size()});
     asset.writeBlob("vertices.bin", mVertices);
     asset.writeBlob("indices.bin", mIndices);
     asset.writeBlob("cell_index.bin", mIndex);
-    for (size_t i = 0; i < mLeafImages.size(); ++i)
-      asset.writeImage(fmt::format("leaf_image_{}.png", i), mLeafImages[i]);
+    asset.writeImages("leaf_image_{}.png", mLeafImages);
     mWood.save(asset);
     asset.writeHeader();
   }
 
   void load(AssetFolder& asset) override {
-    asset.readHeaderOf("single_leaf_indirect");
-    const auto& header = asset.header();
+    mReport = asset.readHeaderOf("single_leaf_indirect");
+    AssetFields fields;
+    asset.readFields(fields);
     const std::string folder = asset.folder().string();
-    mReport = header.at("report");
-    mIndexSize = {header.at("index_size")[0], header.at("index_size")[1]};
+    mIndexSize = fields.indexSize;
     mVertices = asset.readBlobAs<Vertex>("vertices.bin");
     mIndices = asset.readBlobAs<uint32_t>("indices.bin");
     mIndex = asset.readBlobAs<uint16_t>("cell_index.bin");
-    mLeafImages.clear();
-    for (size_t i = 0; i < header.at("leaf_images").get<size_t>(); ++i)
-      mLeafImages.push_back(asset.readImage(fmt::format("leaf_image_{}.png", i)));
+    mLeafImages = asset.readImages("leaf_image_{}.png", fields.leafImages);
     if (mIndex.size() != size_t(mIndexSize.x) * mIndexSize.y)
       throwInputError("{}: cell index size mismatch", folder);
     for (uint16_t reference : mIndex) {
@@ -207,8 +216,9 @@ class SingleLeafIndirect final : public Method {
                         mLeafImages.size());
     }
     validateIndices(mIndices, mVertices.size(), asset.folder().string());
-    mLevels.load(header, mIndices.size(), asset.folder().string());
+    mLevels.load(asset, mIndices.size());
     mWood.load(asset);
+    asset.finishReading();
   }
 
  private:

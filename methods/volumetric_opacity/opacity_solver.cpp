@@ -26,7 +26,7 @@ struct RowBlocks {
 RowBlocks rowBlocks(const std::vector<OpacityView>& views, int stride) {
   RowBlocks blocks;
   for (size_t v = 0; v < views.size(); ++v)
-    for (int y = 0; y < views[v].camera.height(); y += stride) blocks.rows.push_back({int(v), y});
+    for (int y = 0; y < views[v].camera.height(); y += stride) blocks.rows.emplace_back(int(v), y);
   return blocks;
 }
 
@@ -212,10 +212,10 @@ SolverResult solveWithCeres(OpacityGrid& grid, const std::vector<OpacityView>& v
                  ++result.rays;
                });
   }
-  for (size_t c = 0; c < values.size(); ++c) {
-    if (!problem.HasParameterBlock(&values[c])) continue;
-    problem.SetParameterLowerBound(&values[c], 0, settings.minTransparency);
-    problem.SetParameterUpperBound(&values[c], 0, 1.0);
+  for (double& value : values) {
+    if (!problem.HasParameterBlock(&value)) continue;
+    problem.SetParameterLowerBound(&value, 0, settings.minTransparency);
+    problem.SetParameterUpperBound(&value, 0, 1.0);
   }
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::CGNR;

@@ -20,36 +20,60 @@
 namespace canopy {
 namespace {
 
+// Each field is documented where visit() names it: that text is what --list-methods and
+// docs/METHODS.md show.
 struct VolumetricParams {
-  int views = 22;                // rendered photographs of a mesh tree (§4, §7: 18–22)
-  int captureResolution = 512;   // pixels per side of each rendered photograph
-  float captureDistance = 3.0f;  // camera distance from the tree's centre in bounding radii
-  int level = 4;                 // grid subdivision levels, 3^level cells per side (§7: 4–5)
-  int texels = 8;                // M: billboard textures are M × M (§6: 4 or 8)
-  float cutoff = 0.94f;          // transparency cutoff threshold (§5; §7 uses 0.9 and 0.94)
-  std::string solver = "projection";  // "projection" (§5, Fig. 5) or "ceres" (ablation)
-  int maxIterations = 10;             // solver iterations at most (§5: 3–4 suffice)
-  float convergence = 0.01f;          // stop when no transparency changes by more in an iteration
-  int rayStride = 1;                  // one ray per stride² pixels (1: every pixel, as §5)
-  bool inpaint = true;            // refill pixels taken by a billboard from their neighbours (§6)
-  bool pack = true;               // pack two RGB textures with disjoint alphas into one slot (§6)
-  float foregroundAlpha = 0.02f;  // alpha above which a pixel belongs to the visual hull
+  int views = 22;
+  int captureResolution = 512;
+  float captureDistance = 3.0f;
+  int level = 4;
+  int texels = 8;
+  float cutoff = 0.94f;
+  std::string solver = "projection";
+  int maxIterations = 10;
+  float convergence = 0.01f;
+  int rayStride = 1;
+  bool inpaint = true;
+  bool pack = true;
+  float foregroundAlpha = 0.02f;
 
   template <class Visitor>
   void visit(Visitor& v) {
-    v("views", views, 2, 200);
-    v("capture_resolution", captureResolution, 32, 4096);
-    v("capture_distance", captureDistance, 1.2f, 100.0f);
-    v("level", level, 1, 5);
-    v("texels", texels, 2, 8);
-    v("cutoff", cutoff, 0.5f, 1.0f);
-    v("solver", solver, {"projection", "ceres"});
-    v("max_iterations", maxIterations, 1, 200);
-    v("convergence", convergence, 0.0f, 1.0f);
-    v("ray_stride", rayStride, 1, 16);
-    v("inpaint", inpaint);
-    v("pack", pack);
-    v("foreground_alpha", foregroundAlpha, 0.0f, 0.5f);
+    v("views", views, 2, 200, "rendered photographs of a mesh tree (§4, §7: 18–22)");
+    v("capture_resolution", captureResolution, 32, 4096,
+      "pixels per side of each rendered photograph");
+    v("capture_distance", captureDistance, 1.2f, 100.0f,
+      "camera distance from the tree's centre in bounding radii");
+    v("level", level, 1, 5, "grid subdivision levels, 3^level cells per side (§7: 4–5)");
+    v("texels", texels, 2, 8, "M: billboard textures are M × M texels (§6: 4 or 8; memory knob)");
+    v("cutoff", cutoff, 0.5f, 1.0f, "transparency cutoff threshold (§5; §7 uses 0.9 and 0.94)");
+    v("solver", solver, {"projection", "ceres"},
+      "projection of log-transparencies (§5, Fig. 5) or bounded least squares (ablation)");
+    v("max_iterations", maxIterations, 1, 200, "solver iterations at most (§5: 3–4 suffice)");
+    v("convergence", convergence, 0.0f, 1.0f,
+      "stop when no transparency changes by more in an iteration");
+    v("ray_stride", rayStride, 1, 16, "one ray per stride² pixels (1: every pixel, as §5)");
+    v("inpaint", inpaint, "refill pixels taken by a billboard from their neighbours (§6)");
+    v("pack", pack, "pack two RGB textures with disjoint alphas into one slot (§6)");
+    v("foreground_alpha", foregroundAlpha, 0.0f, 0.5f,
+      "alpha above which a pixel belongs to the visual hull");
+  }
+};
+
+// The asset header's own part.
+struct AssetFields {
+  Aabb root;                                // the grid's root cube
+  int level = 0;                            // subdivision levels
+  std::vector<int> cellsPerLevel;           // non-empty cells per level
+  std::vector<glm::vec3> cameraDirections;  // of the input views, unit
+  int texels = 0;                           // M
+  template <class V>
+  void visit(V& v) {
+    v("root", root);
+    v("level", level);
+    v("cells_per_level", cellsPerLevel);
+    v("camera_directions", cameraDirections);
+    v("texels", texels);
   }
 };
 
@@ -254,15 +278,8 @@ class VolumetricOpacity final : public Method {
 
   void save(AssetFolder& asset) const override {
     asset.describe("volumetric_opacity", effectiveParams(), mReport);
-    auto& header = asset.header();
-    header["root"] = {mGrid.root.min.x, mGrid.root.min.y, mGrid.root.min.z,
-                      mGrid.root.max.x, mGrid.root.max.y, mGrid.root.max.z};
-    header["level"] = mGrid.level;
-    header["cells_per_level"] = mGrid.nonEmptyPerLevel;
-    nlohmann::json directions = nlohmann::json::array();
-    for (const glm::vec3& d : mCameraDirections) directions.push_back({d.x, d.y, d.z});
-    header["camera_directions"] = directions;
-    header["texels"] = mTextures.texels;
+    asset.writeFields(AssetFields{mGrid.root, mGrid.level, mGrid.nonEmptyPerLevel,
+                                  mCameraDirections, mTextures.texels});
     asset.writeBlob("cells.bin", mGrid.cells);
     asset.writeBlob("transparency.bin", mGrid.transparency);
     asset.writeBlob("tile_of_cell_view.bin", mTextures.tile);
@@ -273,25 +290,21 @@ class VolumetricOpacity final : public Method {
   }
 
   void load(AssetFolder& asset) override {
-    asset.readHeaderOf("volumetric_opacity");
-    const auto& header = asset.header();
+    mReport = asset.readHeaderOf("volumetric_opacity");
+    AssetFields fields;
+    asset.readFields(fields);
     const std::string folder = asset.folder().string();
-    mReport = header.at("report");
-    const auto& r = header.at("root");
     mGrid = {};
-    mGrid.root.min = {r[0], r[1], r[2]};
-    mGrid.root.max = {r[3], r[4], r[5]};
-    mGrid.level = header.at("level");
+    mGrid.root = fields.root;
+    mGrid.level = fields.level;
     if (mGrid.level < 1 || mGrid.level > 5) throwInputError("{}: level out of range", folder);
     mGrid.side = 1;
     for (int l = 0; l < mGrid.level; ++l) mGrid.side *= 3;
     mGrid.cellSize = mGrid.root.extent().x / float(mGrid.side);
-    mGrid.nonEmptyPerLevel = header.at("cells_per_level").get<std::vector<int>>();
-    mCameraDirections.clear();
-    for (const auto& d : header.at("camera_directions"))
-      mCameraDirections.push_back({d[0], d[1], d[2]});
+    mGrid.nonEmptyPerLevel = fields.cellsPerLevel;
+    mCameraDirections = fields.cameraDirections;
     mTextures = {};
-    mTextures.texels = header.at("texels");
+    mTextures.texels = fields.texels;
     mGrid.cells = asset.readBlobAs<glm::ivec3>("cells.bin");
     mGrid.transparency = asset.readBlobAs<float>("transparency.bin");
     mTextures.tile = asset.readBlobAs<uint32_t>("tile_of_cell_view.bin");
@@ -314,6 +327,7 @@ class VolumetricOpacity final : public Method {
     if (!valid) throwInputError("{}: corrupt volumetric_opacity asset", folder);
     mGrid.rebuildLattice();
     buildOrders();
+    asset.finishReading();
   }
 
  private:

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "bench/harness.h"
+#include "common/config.h"
 #include "common/gl/api.h"
 #include "methods/method.h"
 #include "test_support.h"
@@ -161,6 +162,42 @@ TEST_P(MethodContract, SavedAssetLoadsAndRendersTheSame) {
   EXPECT_THROW(wrong->load(again), InputError);
   EXPECT_EQ(mHarness->render(*method, camera(tree, 60.0f)),
             mHarness->render(*loaded, camera(tree, 60.0f)));
+}
+
+// A corrupt asset header is bad input naming asset.json: each key removed, given the wrong type,
+// or joined by a key no part reads.
+TEST_P(MethodContract, CorruptAssetHeadersAreInputErrors) {
+  const Tree tree = test::smallTree();
+  auto method = bakeAndUpload(tree, "original");
+  test::TempDir dir;
+  AssetFolder asset(dir.path());
+  method->save(asset);
+  const std::string headerPath = (dir.path() / "asset.json").string();
+  const nlohmann::json header = readJsonFile(headerPath);
+  const auto expectInputError = [&](const nlohmann::json& corrupt, const std::string& what) {
+    test::writeText(headerPath, corrupt.dump());
+    auto loaded = create(method->effectiveParams());
+    AssetFolder reader(dir.path());
+    try {
+      loaded->load(reader);
+      ADD_FAILURE() << what << " was accepted";
+    } catch (const InputError& error) {
+      EXPECT_NE(std::string(error.what()).find(dir.path().string()), std::string::npos)
+          << what << ": " << error.what();
+    }
+  };
+  for (const auto& [key, value] : header.items()) {
+    nlohmann::json missing = header;
+    missing.erase(key);
+    expectInputError(missing, "without '" + key + "'");
+    if (key == "params" || key == "report" || value.is_string()) continue;  // free-form
+    nlohmann::json mistyped = header;
+    mistyped[key] = "not this";
+    expectInputError(mistyped, "'" + key + "' as a string");
+  }
+  nlohmann::json extra = header;
+  extra["surprise"] = 1;
+  expectInputError(extra, "an unknown key");
 }
 
 TEST_P(MethodContract, DrawsForestsWithoutGlErrors) {
