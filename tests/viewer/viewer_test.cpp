@@ -2,9 +2,12 @@
 // image shows the tree where the camera frames it; bad input is one line and exit code 2.
 #include <gtest/gtest.h>
 
+#include "common/camera_path.h"
 #include "common/image.h"
 #include "methods/method.h"
 #include "test_support.h"
+#include "viewer/camera_controller.h"
+#include "viewer/camera_recorder.h"
 
 namespace canopy {
 namespace {
@@ -103,6 +106,39 @@ TEST(Viewer, BadInputIsOneLineAndExitCode2) {
       test::runCommand(kView + " --method bbox_hierarchy --params '{\"texture_size\": 0}'", &error),
       2);
   EXPECT_NE(error.find("texture_size"), std::string::npos) << error;
+  // A screenshot into a folder that does not exist names the folder.
+  EXPECT_EQ(test::runCommand("xvfb-run -a " + kView +
+                                 " --tree sparse --leaves 200 --hide-ui --frames 1 --screenshot " +
+                                 (dir / "missing" / "x.png").string() + " --bookmarks " +
+                                 (dir / "b.json").string(),
+                             &error),
+            2);
+  EXPECT_NE(error.find((dir / "missing").string()), std::string::npos) << error;
+}
+
+// The viewer's recorder writes the camera-path format the bench replays (one reader, one writer).
+TEST(CameraRecorder, RecordedPathsAreWhatTheBenchReplays) {
+  test::TempDir dir;
+  CameraRecorder recorder((dir / "b.json").string(), (dir / "path.json").string());
+  CameraController controller;
+  controller.frameTree(test::smallTree(50).bounds);
+  EXPECT_EQ(recorder.toggleRecording("sparse"), "recording the camera path");
+  const Camera first = controller.camera(40.0f);
+  recorder.record(first);
+  controller.update({30.0f, 0.0f}, 0.0f, glm::vec3(0.0f), 0.1f);
+  const Camera second = controller.camera(35.0f);
+  recorder.record(second);
+  EXPECT_NE(recorder.toggleRecording("sparse").find("2 frames"), std::string::npos);
+  const std::vector<Camera> path = readCameraPath(dir / "path.json");
+  ASSERT_EQ(path.size(), 2u);
+  EXPECT_EQ(path[0].position, first.position);
+  EXPECT_EQ(path[1].target, second.target);
+  EXPECT_FLOAT_EQ(path[1].fovYDegrees, 35.0f);
+  EXPECT_NE(path[0].position, path[1].position) << "the camera moved between the frames";
+  EXPECT_NE(recorder.addBookmark(controller).find("bookmark 1"), std::string::npos);
+  CameraRecorder again((dir / "b.json").string(), (dir / "path2.json").string());
+  again.loadBookmarks();
+  EXPECT_EQ(again.bookmarkCount(), 1u);
 }
 
 }  // namespace
