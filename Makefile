@@ -9,7 +9,7 @@ PYTHON ?= /usr/bin/python3
 # The run folder of CONFIG: results/<its "name">, read when a target needs it.
 RUN = $(shell $(PYTHON) -c "import json; print(json.load(open('$(CONFIG)'))['name'])")
 
-.PHONY: deps configure build test bench figures format clean
+.PHONY: deps configure build test lint bench figures format docs clean
 
 deps:
 	@tools/install-deps.sh
@@ -22,6 +22,14 @@ build: configure
 
 test: build
 	@ctest --preset $(PRESET)
+
+# clang-format, clang-tidy and the function-length check (tools/lint.sh); CI runs it.
+lint: build
+	@tools/lint.sh
+
+# Rewrites docs/METHODS.md's parameter tables from the code (a test checks they match).
+docs: build
+	@tools/update-method-docs.sh
 
 # Resumes an interrupted run of the same config and code; otherwise (a fresh clone's committed
 # results, or a finished run) moves the old run aside and measures anew. Then its figures.

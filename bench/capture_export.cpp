@@ -23,6 +23,7 @@ void exportCaptures(const Tree& tree, const std::filesystem::path& folder,
   }
   const auto photograph = [&](const std::vector<Camera>& cameras) {
     std::vector<CapturedView> views;
+    views.reserve(cameras.size());
     for (const Camera& camera : cameras) {
       views.push_back(
           {camera,

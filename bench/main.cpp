@@ -22,6 +22,16 @@
 namespace canopy {
 namespace {
 
+// A built-in tree as the export commands name it.
+TreeSpec presetSpec(const std::string& preset, int64_t seed, int leaves) {
+  if (seed < 0 || leaves < 0) throwInputError("--seed, --leaves: must be >= 0");
+  TreeSpec spec;
+  spec.preset = preset;
+  spec.seed = static_cast<uint64_t>(seed);
+  spec.leaves = leaves;
+  return spec;
+}
+
 // The main command: run a config.
 struct RunCommand {
   std::string config, out, backend = "osmesa", shard = "0/1";
@@ -94,13 +104,8 @@ struct ExportTreeCommand {
   }
 
   int run() const {
-    if (seed < 0) throwInputError("--seed: must be >= 0");
-    if (leaves < 0) throwInputError("--leaves: must be >= 0");
-    TreeSpec spec;
-    spec.preset = preset;
-    spec.seed = static_cast<uint64_t>(seed);
-    spec.leaves = leaves;
-    std::printf("%s\n", exportTreeObj(loadTree(spec), out).string().c_str());
+    std::printf("%s\n",
+                exportTreeObj(loadTree(presetSpec(preset, seed, leaves)), out).string().c_str());
     return kExitOk;
   }
 };
@@ -126,18 +131,14 @@ struct ExportCapturesCommand {
   }
 
   int run(const std::string& backend) const {
-    if (seed < 0 || leaves < 0) throwInputError("--seed, --leaves: must be >= 0");
     if (options.trainViews < 2 || options.testViews < 1 || options.resolution < 16 ||
         options.resolution > 4096 || !(options.distance > 1.1f)) {
       throwInputError(
           "export-captures: need --train >= 2, --test >= 1, --resolution in [16, 4096], "
           "--distance > 1.1");
     }
-    TreeSpec spec;
-    spec.preset = preset;
-    spec.seed = static_cast<uint64_t>(seed);
-    spec.leaves = leaves;
-    exportCaptures(loadTree(spec), out, options, gl::parseBackend(backend));
+    exportCaptures(loadTree(presetSpec(preset, seed, leaves)), out, options,
+                   gl::parseBackend(backend));
     std::printf("%s\n", out.c_str());
     return kExitOk;
   }

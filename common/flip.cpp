@@ -105,7 +105,7 @@ Plane convolve(const Plane& in, const std::vector<float>& kernel, bool alongY) {
     float* dst = &out.values[size_t(y) * w];
     if (alongY) {
       for (int k = -radius; k <= radius; ++k) {
-        const float weight = kernel[size_t(k + radius)];
+        const float weight = kernel[k + radius];
         const float* src = &in.values[size_t(std::clamp(y + k, 0, h - 1)) * w];
         for (int x = 0; x < w; ++x) dst[x] += weight * src[x];
       }
@@ -115,13 +115,13 @@ Plane convolve(const Plane& in, const std::vector<float>& kernel, bool alongY) {
     // Interior pixels, whose taps all lie inside the row; then the borders, clamped.
     const int x0 = std::min(radius, w), x1 = std::max(x0, w - radius);
     for (int k = -radius; k <= radius; ++k) {
-      const float weight = kernel[size_t(k + radius)];
+      const float weight = kernel[k + radius];
       for (int x = x0; x < x1; ++x) dst[x] += weight * src[x + k];
     }
     const auto clamped = [&](int x) {
       float sum = 0.0f;
       for (int k = -radius; k <= radius; ++k)
-        sum += kernel[size_t(k + radius)] * src[std::clamp(x + k, 0, w - 1)];
+        sum += kernel[k + radius] * src[std::clamp(x + k, 0, w - 1)];
       dst[x] = sum;
     };
     for (int x = 0; x < x0; ++x) clamped(x);
@@ -143,12 +143,12 @@ Plane filterChannel(const Plane& in, const std::array<CsfTerm, 2>& terms, double
   double total = 0.0;
   for (const CsfTerm& term : terms) {
     if (term.a == 0.0) continue;
-    std::vector<float> e(size_t(2 * radius + 1));
+    std::vector<float> e(2 * static_cast<size_t>(radius) + 1);
     double sum = 0.0;
     for (int i = -radius; i <= radius; ++i) {
       const double x = double(i) / ppd;
-      e[size_t(i + radius)] = float(std::exp(-kPi * kPi * x * x / term.b));
-      sum += e[size_t(i + radius)];
+      e[i + radius] = float(std::exp(-kPi * kPi * x * x / term.b));
+      sum += e[i + radius];
     }
     const double weight = term.a * std::sqrt(kPi / term.b);
     total += weight * sum * sum;
@@ -184,13 +184,14 @@ struct Features {
 Features detectFeatures(const Plane& luminance, double ppd) {
   const double sigma = 0.5 * kWidth * ppd;
   const int radius = static_cast<int>(std::ceil(3.0 * sigma));
-  std::vector<float> gauss(size_t(2 * radius + 1)), first(gauss.size()), second(gauss.size());
+  std::vector<float> gauss(2 * static_cast<size_t>(radius) + 1), first(gauss.size()),
+      second(gauss.size());
   double sum = 0.0;
   for (int i = -radius; i <= radius; ++i) {
     const double g = std::exp(-double(i * i) / (2.0 * sigma * sigma));
-    gauss[size_t(i + radius)] = float(g);
-    first[size_t(i + radius)] = float(-double(i) * g);
-    second[size_t(i + radius)] = float((double(i * i) / (sigma * sigma) - 1.0) * g);
+    gauss[i + radius] = float(g);
+    first[i + radius] = float(-double(i) * g);
+    second[i + radius] = float((double(i * i) / (sigma * sigma) - 1.0) * g);
     sum += g;
   }
   for (float& g : gauss) g = float(g / sum);

@@ -128,7 +128,7 @@ void addCylinder(WoodMesh& wood, const Turtle& turtle, float length, float radiu
       const glm::vec3 p = centre + radial * r;
       wood.positions.push_back(p);
       wood.normals.push_back(glm::normalize(radial));
-      wood.uvs.push_back({float(s) / float(sides), float(ring) * length});
+      wood.uvs.emplace_back(float(s) / float(sides), float(ring) * length);
       nodeBounds.extend(p);
     }
   }

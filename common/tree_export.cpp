@@ -46,15 +46,15 @@ std::filesystem::path exportTreeObj(const Tree& tree, const std::filesystem::pat
   }
   obj += "o leaves\n";
   const size_t vertexBase = wood.positions.size(), uvBase = wood.uvs.size();
-  for (size_t l = 0; l < tree.leaves.size(); ++l) {
+  for (const Leaf& leaf : tree.leaves) {
     for (int c = 0; c < 4; ++c) {
-      const glm::vec3 p = tree.leaves[l].corner(c);
+      const glm::vec3 p = leaf.corner(c);
       obj += fmt::format("v {} {} {}\n", p.x, p.y, p.z);
     }
   }
-  for (size_t l = 0; l < tree.leaves.size(); ++l) {
+  for (const Leaf& leaf : tree.leaves) {
     for (int c = 0; c < 4; ++c) {
-      const glm::vec2 uv = tree.leaves[l].cornerUv(c);
+      const glm::vec2 uv = leaf.cornerUv(c);
       obj += fmt::format("vt {} {}\n", uv.x, 1.0f - uv.y);
     }
   }
@@ -68,7 +68,7 @@ std::filesystem::path exportTreeObj(const Tree& tree, const std::filesystem::pat
     obj +=
         fmt::format("f {}/{} {}/{} {}/{} {}/{}\n", v, t, v + 1, t + 1, v + 2, t + 2, v + 3, t + 3);
   }
-  const auto path = folder / (stem + ".obj");
+  auto path = folder / (stem + ".obj");
   writeTextAtomically(path, obj);
   return path;
 }

@@ -334,7 +334,7 @@ LeafTexture leafTextureOf(LoadContext& context, const aiMaterial& material) {
 Tree loadTreeFile(const TreeFileOptions& options) {
   const std::string& file = options.path;
   if (options.up != "y" && options.up != "z") {
-    throwInputError("{}: up axis '{}' must be \"y\" or \"z\"", file, options.up);
+    throwInputError(R"({}: up axis '{}' must be "y" or "z")", file, options.up);
   }
   if (!fs::is_regular_file(file)) throwInputError("{}: file does not exist", file);
   if (fs::file_size(file) == 0) throwInputError("{}: file is empty", file);

@@ -35,7 +35,7 @@ TreeSpec parseTreeSpec(ConfigObject& config, const std::string& baseDirectory) {
   const bool hasPreset = config.has("preset"), hasFile = config.has("file"),
              hasCaptures = config.has("captures");
   if (int(hasPreset) + int(hasFile) + int(hasCaptures) != 1) {
-    throwInputError("config {}: a tree needs exactly one of \"preset\", \"file\" or \"captures\"",
+    throwInputError(R"(config {}: a tree needs exactly one of "preset", "file" or "captures")",
                     config.path());
   }
   if (hasCaptures) {
@@ -66,7 +66,7 @@ TreeSpec parseTreeSpec(ConfigObject& config, const std::string& baseDirectory) {
     spec.file.leafMaterials = config.get<std::vector<std::string>>("leaf_materials", {});
     spec.file.up = config.get<std::string>("up", "y");
     if (spec.file.up != "y" && spec.file.up != "z") {
-      throwInputError("config {}: '{}' must be \"y\" or \"z\"", config.keyPath("up"), spec.file.up);
+      throwInputError(R"(config {}: '{}' must be "y" or "z")", config.keyPath("up"), spec.file.up);
     }
   }
   config.finish("a tree");

@@ -69,6 +69,25 @@ class ImageIndex:
         return tree_dir / self.variants[variant] if variant in self.variants else None
 
 
+def finish_panel(axis, tree, xlabel, ylabel, log_x=False, log_y=False):
+    """The labels, scales, grid and legend every per-tree panel gets."""
+    if log_x:
+        axis.set_xscale("log")
+    if log_y:
+        axis.set_yscale("log")
+    axis.set_xlabel(xlabel)
+    axis.set_ylabel(ylabel)
+    axis.set_title(tree)
+    axis.grid(True, which="both", alpha=0.3)
+    axis.legend(fontsize=6)
+
+
+def save_figure(fig, path):
+    fig.tight_layout()
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+
+
 def plot_per_tree(rows, trees, prefix, xlabel, ylabel, log_y, path, extra=None):
     """One panel per tree, one line per method variant, x from the column suffix (log scale).
     `extra(axis, row, colour)` may add a variant's further marks in its line's colour."""
@@ -81,17 +100,8 @@ def plot_per_tree(rows, trees, prefix, xlabel, ylabel, log_y, path, extra=None):
                                   label=row["variant"])
                 if extra:
                     extra(axis, row, line.get_color())
-        axis.set_xscale("log")
-        if log_y:
-            axis.set_yscale("log")
-        axis.set_xlabel(xlabel)
-        axis.set_ylabel(ylabel)
-        axis.set_title(tree)
-        axis.grid(True, which="both", alpha=0.3)
-        axis.legend(fontsize=6)
-    fig.tight_layout()
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
+        finish_panel(axis, tree, xlabel, ylabel, log_x=True, log_y=log_y)
+    save_figure(fig, path)
 
 
 def pareto_front(points):
@@ -127,9 +137,7 @@ def plot_memory_vs_psnr(rows, trees, path):
         axis.set_ylabel("PSNR (dB)")
         axis.set_title(tree)
         axis.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def plot_bake_time(rows, path):
@@ -142,9 +150,7 @@ def plot_bake_time(rows, path):
     axis.set_xscale("log")
     axis.set_xlabel("bake time (s, CPU + upload-free)")
     axis.grid(True, axis="x", which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def plot_scatter_per_tree(rows, trees, points_of, xlabel, ylabel, log_x, path):
@@ -163,16 +169,8 @@ def plot_scatter_per_tree(rows, trees, points_of, xlabel, ylabel, log_x, path):
                 if label:
                     axis.annotate(label, (x, y), fontsize=5, xytext=(2, 2), textcoords="offset points",
                                   color=mark.get_color())
-        if log_x:
-            axis.set_xscale("log")
-        axis.set_xlabel(xlabel)
-        axis.set_ylabel(ylabel)
-        axis.set_title(tree)
-        axis.grid(True, which="both", alpha=0.3)
-        axis.legend(fontsize=6)
-    fig.tight_layout()
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
+        finish_panel(axis, tree, xlabel, ylabel, log_x=log_x)
+    save_figure(fig, path)
     return drawn
 
 
@@ -200,16 +198,9 @@ def plot_speedup_vs_trees(rows, trees, path):
             if xs:
                 axis.errorbar(xs, ys, yerr=[low, high], marker="o", capsize=3, label=row["variant"])
         axis.axhline(1.0, color="k", linewidth=0.8)
-        axis.set_xscale("log")
-        axis.set_yscale("log")
-        axis.set_xlabel("trees in the forest")
-        axis.set_ylabel("speedup vs polygonal (same run)")
-        axis.set_title(tree)
-        axis.grid(True, which="both", alpha=0.3)
-        axis.legend(fontsize=6)
-    fig.tight_layout()
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
+        finish_panel(axis, tree, "trees in the forest", "speedup vs polygonal (same run)",
+                     log_x=True, log_y=True)
+    save_figure(fig, path)
 
 
 def load_rgb(path):
@@ -314,9 +305,7 @@ def crops(run_dir, index, tree, variants, path, size=128):
         axis.set_title(label, fontsize=6)
         axis.set_xticks([]), axis.set_yticks([])
     fig.suptitle(f"{tree}, view {keys[0]}, {size}×{size} px crop", fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
+    save_figure(fig, path)
     return True
 
 

@@ -3,7 +3,7 @@
 namespace canopy {
 
 void BakeWorker::start(std::unique_ptr<Method> method, const Tree& tree, std::string label,
-                       Photographer photograph) {
+                       const Photographer& photograph) {
   mStarted = std::chrono::steady_clock::now();
   mLabel = std::move(label);
   mBake =

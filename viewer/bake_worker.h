@@ -27,7 +27,7 @@ class BakeWorker {
   // Starts baking `method` of `tree` (which must outlive the bake); `photograph` runs on the GL
   // thread.
   void start(std::unique_ptr<Method> method, const Tree& tree, std::string label,
-             Photographer photograph);
+             const Photographer& photograph);
   // On the GL thread, once a frame: serves queued GL work; returns the method once baked (and
   // rethrows what the bake threw), else null.
   std::unique_ptr<Method> poll();

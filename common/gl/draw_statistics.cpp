@@ -38,7 +38,7 @@ void DrawStatistics::begin() {
 DrawCounts DrawStatistics::end() {
   assert(mActive);
   const Api& g = api();
-  for (int i = 0; i < 2; ++i) g.EndQuery(mTargets[i]);
+  for (const GLenum target : mTargets) g.EndQuery(target);
   mActive = false;
   GLuint64 values[2] = {0, 0};
   for (int i = 0; i < 2; ++i) g.GetQueryObjectui64v(mQueries[i], GL_QUERY_RESULT, &values[i]);
