@@ -9,7 +9,7 @@ PYTHON ?= /usr/bin/python3
 # The run folder of CONFIG: results/<its "name">, read when a target needs it.
 RUN = $(shell $(PYTHON) -c "import json; print(json.load(open('$(CONFIG)'))['name'])")
 
-.PHONY: deps configure build test lint bench figures format docs clean
+.PHONY: deps configure build test lint sanitize fuzz bench figures format docs clean
 
 deps:
 	@tools/install-deps.sh
@@ -26,6 +26,19 @@ test: build
 # clang-format, clang-tidy and the function-length check (tools/lint.sh); CI runs it.
 lint: build
 	@tools/lint.sh
+
+# The CPU-only tests built with AddressSanitizer and UndefinedBehaviorSanitizer (preset "debug");
+# CI runs it after make test.
+sanitize: deps
+	@cmake --preset debug
+	@cmake --build --preset debug -j $(JOBS) --target canopy_tests canopy-bench
+	@ctest --preset debug
+
+# libFuzzer harnesses (tests/fuzz), each run FUZZ_SECONDS, FUZZ_JOBS at a time; fails on a crash.
+FUZZ_SECONDS ?= 60
+FUZZ_JOBS ?= 1
+fuzz:
+	@tools/fuzz.sh $(FUZZ_SECONDS) $(FUZZ_JOBS)
 
 # Rewrites docs/METHODS.md's parameter tables from the code (a test checks they match).
 docs: build

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <regex>
 #include <set>
 
 #include <fmt/format.h>
@@ -142,6 +141,8 @@ namespace {
 std::vector<TreeSpec> parseTrees(ConfigObject& config, const std::string& baseDirectory) {
   std::vector<TreeSpec> trees;
   if (config.has("trees")) {
+    if (config.require("trees") == nlohmann::json::array())
+      throwInputError("config trees: an empty list runs nothing (leave the key out for broadleaf)");
     for (ConfigObject& tree : config.children("trees"))
       trees.push_back(parseTreeSpec(tree, baseDirectory));
   } else {
@@ -151,7 +152,11 @@ std::vector<TreeSpec> parseTrees(ConfigObject& config, const std::string& baseDi
   }
   std::set<std::string> labels;
   for (const TreeSpec& tree : trees) {
-    if (!labels.insert(tree.label()).second)
+    const std::string label = tree.label();
+    if (label.empty() || label == "." || label == "..")
+      throwInputError("config trees: '{}' is no name for a results folder (give it a \"name\")",
+                      label);
+    if (!labels.insert(label).second)
       throwInputError("config trees: '{}' appears twice (give one a \"name\")", tree.label());
   }
   return trees;
@@ -162,6 +167,9 @@ std::vector<TreeSpec> parseTrees(ConfigObject& config, const std::string& baseDi
 std::vector<MethodVariant> parseMethods(ConfigObject& config) {
   std::vector<MethodVariant> variants;
   if (config.has("methods")) {
+    if (config.require("methods") == nlohmann::json::array())
+      throwInputError(
+          "config methods: an empty list runs nothing (leave the key out for every method)");
     for (ConfigObject& entry : config.children("methods")) {
       const std::string method = entry.get<std::string>("method");
       const MethodInfo& info = builtinMethods().find(method);
@@ -224,11 +232,7 @@ ExperimentConfig parseExperimentConfig(const nlohmann::json& json,
   experiment.raw = json;
   experiment.hash = hashJson(json);
   ConfigObject config(json, "");
-  experiment.name = config.get<std::string>("name");
-  if (!std::regex_match(experiment.name, std::regex("[A-Za-z0-9_.-]+"))) {
-    throwInputError("config name: '{}' may use only letters, digits, '_', '.', '-'",
-                    experiment.name);
-  }
+  experiment.name = checkPathComponent(config.get<std::string>("name"), "config name");
   int64_t seed = 1;
   ParamReader reader(config, "config");
   reader("seed", seed, int64_t(0), int64_t(1) << 53, "every random choice of the run");

@@ -1,5 +1,6 @@
 // canopy-bench: runs an experiment config and writes results/<name>/.
 // Exit codes: 0 success, 2 bad input or config (one line on stderr), 1 internal error.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -9,10 +10,12 @@
 #include "bench/capture_export.h"
 #include "bench/experiment.h"
 #include "bench/merge.h"
+#include "bench/render_from_assets.h"
 #include "bench/report.h"
 #include "bench/results_store.h"
 #include "bench/run_meta.h"
 #include "bench/runner.h"
+#include "common/command_line.h"
 #include "common/error.h"
 #include "common/progress.h"
 #include "common/tree_export.h"
@@ -89,6 +92,9 @@ int listMethods(bool markdown) {
   return kExitOk;
 }
 
+// The largest seed a config accepts (integers beyond 2^53 do not survive JSON as doubles).
+constexpr int64_t kMaxSeed = int64_t(1) << 53;
+
 struct ExportTreeCommand {
   CLI::App* app = nullptr;
   std::string preset = "broadleaf", out;
@@ -98,8 +104,9 @@ struct ExportTreeCommand {
   void add(CLI::App& parent) {
     app = parent.add_subcommand("export-tree", "write a built-in tree as OBJ + MTL + PNG");
     app->add_option("--preset", preset, "broadleaf | shrub | sparse");
-    app->add_option("--seed", seed, "L-system seed");
-    app->add_option("--leaves", leaves, "leaf count (0: the preset's)");
+    app->add_option("--seed", seed, "L-system seed")->check(CLI::Range(int64_t(0), kMaxSeed));
+    app->add_option("--leaves", leaves, "leaf count (0: the preset's)")
+        ->check(CLI::Range(0, 2'000'000));
     app->add_option("--out", out, "output folder")->required();
   }
 
@@ -121,25 +128,54 @@ struct ExportCapturesCommand {
     app = parent.add_subcommand("export-captures",
                                 "photograph a built-in tree into a NeRF-layout capture folder");
     app->add_option("--preset", preset, "broadleaf | shrub | sparse");
-    app->add_option("--seed", seed, "L-system seed");
-    app->add_option("--leaves", leaves, "leaf count (0: the preset's)");
-    app->add_option("--train", options.trainViews, "training views");
-    app->add_option("--test", options.testViews, "held-out test views");
-    app->add_option("--resolution", options.resolution, "pixels per side");
-    app->add_option("--distance", options.distance, "camera distance in bounding radii");
+    app->add_option("--seed", seed, "L-system seed")->check(CLI::Range(int64_t(0), kMaxSeed));
+    app->add_option("--leaves", leaves, "leaf count (0: the preset's)")
+        ->check(CLI::Range(0, 2'000'000));
+    app->add_option("--train", options.trainViews, "training views")->check(CLI::Range(2, 10000));
+    app->add_option("--test", options.testViews, "held-out test views")
+        ->check(CLI::Range(1, 10000));
+    app->add_option("--resolution", options.resolution, "pixels per side")
+        ->check(CLI::Range(16, 4096));
+    app->add_option("--distance", options.distance, "camera distance in bounding radii")
+        ->check(CLI::Range(1.1f, 1000.0f));
     app->add_option("--out", out, "output folder")->required();
   }
 
   int run(const std::string& backend) const {
-    if (options.trainViews < 2 || options.testViews < 1 || options.resolution < 16 ||
-        options.resolution > 4096 || !(options.distance > 1.1f)) {
-      throwInputError(
-          "export-captures: need --train >= 2, --test >= 1, --resolution in [16, 4096], "
-          "--distance > 1.1");
-    }
+    // CLI::Range lets NaN through (every comparison with it is false).
+    if (!std::isfinite(options.distance)) throwInputError("--distance: must be a finite number");
     exportCaptures(loadTree(presetSpec(preset, seed, leaves)), out, options,
                    gl::parseBackend(backend));
     std::printf("%s\n", out.c_str());
+    return kExitOk;
+  }
+};
+
+// render --config C --tree T --variant V --view K --image PNG [--run RUN]: one view from a saved
+// asset, without baking.
+struct RenderCommand {
+  CLI::App* app = nullptr;
+  RenderFromAssetsRequest request;
+  std::string runFolder;
+
+  void add(CLI::App& parent) {
+    app = parent.add_subcommand("render",
+                                "draw one view of a variant from the asset a run saved (no bake)");
+    app->add_option("--config", request.config, "the run's experiment config")->required();
+    app->add_option("--run", runFolder, "the run folder (default: results/<config name>)");
+    app->add_option("--tree", request.tree, "tree label, as in the run's records")->required();
+    app->add_option("--variant", request.variant, "variant label, as in the run's records")
+        ->required();
+    app->add_option("--view", request.view, "view key, as in the run's records (d4_e30_a0)")
+        ->required();
+    app->add_option("--image", request.image, "PNG to write")->required();
+  }
+
+  int run(const std::string& backend) {
+    request.run = runFolder;
+    request.backend = gl::parseBackend(backend);
+    renderFromAssets(request);
+    std::printf("%s\n", request.image.c_str());
     return kExitOk;
   }
 };
@@ -197,17 +233,14 @@ int main(int argc, char** argv) {
   ExportCapturesCommand exportCaptures;
   ReportCommand report;
   MergeCommand merge;
+  RenderCommand render;
   run.add(app);
   exportTree.add(app);
   exportCaptures.add(app);
   report.add(app);
   merge.add(app);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& error) {
-    const int code = app.exit(error);
-    return code == 0 ? kExitOk : kExitBadInput;
-  }
+  render.add(app);
+  if (const auto exitCode = parseCommandLine(app, "canopy-bench", argc, argv)) return *exitCode;
   return runWithExitCodes("canopy-bench", [&]() -> int {
     if (run.quiet) {
       spdlog::set_level(spdlog::level::warn);
@@ -218,6 +251,7 @@ int main(int argc, char** argv) {
     if (*exportCaptures.app) return exportCaptures.run(run.backend);
     if (*report.app) return report.run();
     if (*merge.app) return merge.run();
+    if (*render.app) return render.run(run.backend);
     return run.run();
   });
 }

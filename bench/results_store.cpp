@@ -7,6 +7,7 @@
 #include <spdlog/spdlog.h>
 
 #include "common/atomic_file.h"
+#include "common/config.h"
 #include "common/error.h"
 
 namespace canopy {
@@ -25,13 +26,7 @@ std::vector<Record> ResultsStore::readRecords(const std::filesystem::path& path)
     ++lineNumber;
     if (line.empty()) continue;
     const std::string where = fmt::format("{}:{}", path.string(), lineNumber);
-    nlohmann::json json;
-    try {
-      json = nlohmann::json::parse(line);
-    } catch (const nlohmann::json::parse_error& error) {
-      throwInputError("{}: not a JSON record ({})", where, error.what());
-    }
-    records.push_back(recordFromJson(json, where));
+    records.push_back(recordFromJson(parseJson(line, where), where));
   }
   return records;
 }

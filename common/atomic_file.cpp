@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/error.h"
+
 namespace canopy {
 namespace {
 
@@ -42,7 +44,7 @@ void writeTextAtomically(const std::filesystem::path& path, std::string_view tex
   writeFileAtomically(path, [&](const std::filesystem::path& temporary) {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
     out.write(text.data(), static_cast<std::streamsize>(text.size()));
-    if (!out) throw std::runtime_error(path.string() + ": cannot write");
+    if (!out) throwInputError("{}: cannot write ({})", path.string(), std::strerror(errno));
   });
 }
 
@@ -51,13 +53,14 @@ void appendLineDurably(const std::filesystem::path& path, std::string_view line)
   std::string buffer(line);
   buffer.push_back('\n');
   const int fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CREAT, 0644);
-  if (fd < 0) throw std::runtime_error(path.string() + ": cannot open: " + std::strerror(errno));
+  if (fd < 0)
+    throwInputError("{}: cannot open for appending ({})", path.string(), std::strerror(errno));
   const ssize_t written = ::write(fd, buffer.data(), buffer.size());
   const int writeErrno = errno;
   ::fsync(fd);
   ::close(fd);
   if (written != static_cast<ssize_t>(buffer.size())) {
-    throw std::runtime_error(path.string() + ": short append: " + std::strerror(writeErrno));
+    throwInputError("{}: short append ({})", path.string(), std::strerror(writeErrno));
   }
 }
 

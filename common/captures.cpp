@@ -1,8 +1,9 @@
 #include "common/captures.h"
 
 #include <cmath>
-#include <fstream>
+#include <filesystem>
 
+#include <fmt/format.h>
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/matrix.hpp>
@@ -10,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/atomic_file.h"
+#include "common/config.h"
 #include "common/error.h"
 
 namespace canopy {
@@ -171,17 +173,37 @@ void writeNerfCaptures(const std::filesystem::path& folder, const std::vector<Ca
 
 namespace {
 
+// A frame's camera-to-world matrix: 4×4 finite numbers, last row (0 0 0 1), and a 3×3 part of
+// full rank (its columns are the camera's right, up and backward axes, however scaled).
+glm::mat4 readCameraToWorld(const nlohmann::json& m, const std::string& where) {
+  const auto notFourByFour = [&] { throwInputError("{} must be 4×4 numbers", where); };
+  if (!m.is_array() || m.size() != 4) notFourByFour();
+  glm::mat4 cameraToWorld(1.0f);
+  for (int r = 0; r < 4; ++r) {
+    if (!m[r].is_array() || m[r].size() != 4) notFourByFour();
+    for (int c = 0; c < 4; ++c) {
+      if (!m[r][c].is_number()) notFourByFour();
+      const float value = m[r][c].get<float>();
+      if (!std::isfinite(value)) throwInputError("{} has a non-finite entry", where);
+      cameraToWorld[c][r] = value;  // JSON rows, glm columns
+    }
+  }
+  if (glm::vec4(m[3][0].get<float>(), m[3][1].get<float>(), m[3][2].get<float>(),
+                m[3][3].get<float>()) != glm::vec4(0, 0, 0, 1))
+    throwInputError("{}: last row must be [0, 0, 0, 1] (a camera pose)", where);
+  const glm::mat3 axes(cameraToWorld);
+  const float scale = glm::length(axes[0]) * glm::length(axes[1]) * glm::length(axes[2]);
+  if (!(scale > 0.0f) || std::abs(glm::determinant(axes)) < 1e-3f * scale)
+    throwInputError("{}: its 3×3 part has rank below 3 (no camera orientation)", where);
+  return cameraToWorld;
+}
+
 std::vector<CapturedView> readTransforms(const std::filesystem::path& folder,
                                          const std::string& fileName, glm::ivec2& size) {
   const std::filesystem::path path = folder / fileName;
-  std::ifstream stream(path);
-  if (!stream) throwInputError("{}: missing (a NeRF capture folder needs it)", path.string());
-  nlohmann::json json;
-  try {
-    json = nlohmann::json::parse(stream);
-  } catch (const nlohmann::json::exception& e) {
-    throwInputError("{}: malformed JSON ({})", path.string(), e.what());
-  }
+  if (!std::filesystem::exists(path))
+    throwInputError("{}: missing (a NeRF capture folder needs it)", path.string());
+  const nlohmann::json json = readJsonFile(path.string());
   std::vector<CapturedView> views;
   try {
     const float angleX = json.at("camera_angle_x").get<float>();
@@ -196,22 +218,15 @@ std::vector<CapturedView> readTransforms(const std::filesystem::path& folder,
       std::filesystem::path file = frame.at("file_path").get<std::string>();
       if (!file.has_extension()) file += ".png";
       const std::filesystem::path imagePath = (folder / file).lexically_normal();
-      const auto& m = frame.at("transform_matrix");
-      if (!m.is_array() || m.size() != 4)
-        throwInputError("{}: frames[{}].transform_matrix must be 4×4", path.string(), f);
-      glm::mat4 cameraToWorld(1.0f);
-      for (int r = 0; r < 4; ++r) {
-        if (!m[r].is_array() || m[r].size() != 4)
-          throwInputError("{}: frames[{}].transform_matrix must be 4×4", path.string(), f);
-        for (int c = 0; c < 4; ++c) {
-          const float value = m[r][c].get<float>();
-          if (!std::isfinite(value))
-            throwInputError("{}: frames[{}].transform_matrix has a non-finite entry", path.string(),
-                            f);
-          cameraToWorld[c][r] = value;  // JSON rows, glm columns
-        }
-      }
-      const ImageRgba8 image = readImage(imagePath);
+      const std::string where = fmt::format("{}: frames[{}].transform_matrix", path.string(), f);
+      const glm::mat4 cameraToWorld = readCameraToWorld(frame.at("transform_matrix"), where);
+      bool hasAlpha = false;
+      const ImageRgba8 image = readImage(imagePath, &hasAlpha);
+      if (!hasAlpha)
+        throwInputError(
+            "{}: no alpha channel; a capture's images need alpha as the object's "
+            "coverage (RGBA, background transparent)",
+            imagePath.string());
       if (size == glm::ivec2(0)) size = {image.width, image.height};
       if (image.width != size.x || image.height != size.y) {
         throwInputError("{}: {}×{}, but the capture's images are {}×{}", imagePath.string(),

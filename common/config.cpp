@@ -1,5 +1,7 @@
 #include "common/config.h"
 
+#include <cctype>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -85,16 +87,90 @@ std::string ParamDescriber::oneOf(const std::vector<std::string>& allowed) {
   return out;
 }
 
+namespace {
+
+// Tracks nesting and the keys seen in every open object while the parser runs.
+class StrictJsonCallback {
+ public:
+  explicit StrictJsonCallback(const std::string& source) : mSource(source) {}
+
+  bool operator()(int, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+    using Event = nlohmann::json::parse_event_t;
+    switch (event) {
+      case Event::object_start:
+      case Event::array_start:
+        if (++mDepth > kMaxJsonDepth)
+          throwInputError("{}: not valid JSON (nested deeper than {} levels)", mSource,
+                          kMaxJsonDepth);
+        mKeys.emplace_back();
+        break;
+      case Event::object_end:
+      case Event::array_end:
+        --mDepth;
+        mKeys.pop_back();
+        break;
+      case Event::key:
+        if (!mKeys.back().insert(parsed.get<std::string>()).second)
+          throwInputError("{}: not valid JSON (key \"{}\" appears twice in one object)", mSource,
+                          shortened(parsed.get<std::string>()));
+        break;
+      case Event::value:
+        break;
+    }
+    return true;
+  }
+
+ private:
+  static std::string shortened(const std::string& text) {
+    return text.size() <= 60 ? text : text.substr(0, 57) + "...";
+  }
+
+  const std::string& mSource;
+  int mDepth = 0;
+  std::vector<std::set<std::string>> mKeys;  // per open object or array (arrays stay empty)
+};
+
+// nlohmann's what() starts with "[json.exception.parse_error.101] "; the reader wants the rest.
+std::string withoutExceptionTag(const char* message) {
+  std::string text = message;
+  if (text.rfind("[json.exception.", 0) == 0) {
+    const size_t end = text.find("] ");
+    if (end != std::string::npos) text = text.substr(end + 2);
+  }
+  return text;
+}
+
+}  // namespace
+
+nlohmann::json parseJson(const std::string& text, const std::string& source) {
+  try {
+    return nlohmann::json::parse(text, StrictJsonCallback(source));
+  } catch (const nlohmann::json::exception& error) {
+    throwInputError("{}: not valid JSON ({})", source, withoutExceptionTag(error.what()));
+  }
+}
+
 nlohmann::json readJsonFile(const std::string& path) {
+  if (std::filesystem::is_directory(path)) throwInputError("{}: is a folder, not a file", path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throwInputError("{}: cannot open file", path);
   std::stringstream buffer;
   buffer << in.rdbuf();
-  try {
-    return nlohmann::json::parse(buffer.str());
-  } catch (const nlohmann::json::parse_error& error) {
-    throwInputError("{}: not valid JSON ({})", path, error.what());
+  if (in.bad()) throwInputError("{}: cannot read file", path);
+  return parseJson(buffer.str(), path);
+}
+
+const std::string& checkPathComponent(const std::string& value, const std::string& what) {
+  const bool allowed = std::all_of(value.begin(), value.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-';
+  });
+  if (!allowed || value.empty() || value.size() > 100 || value == "." || value == "..") {
+    const std::string shown = value.size() <= 60 ? value : value.substr(0, 57) + "...";
+    throwInputError(
+        "{}: '{}' must be 1 to 100 letters, digits, '_', '.' or '-', and not '.' or '..'", what,
+        shown);
   }
+  return value;
 }
 
 }  // namespace canopy

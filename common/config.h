@@ -85,8 +85,21 @@ class ConfigObject {
   mutable std::set<std::string> mUsed;
 };
 
-// Reads a JSON file; InputError naming the file when it is missing or not valid JSON.
+// Every JSON text the project reads (configs, records, captures, camera paths, asset headers)
+// goes through this parser: syntax errors, numbers out of double range (1e400), objects that
+// name a key twice (JSON leaves the winner open) and nesting deeper than kMaxJsonDepth (which
+// would otherwise exhaust the stack later) are InputErrors naming `source` and the position.
+inline constexpr int kMaxJsonDepth = 64;
+nlohmann::json parseJson(const std::string& text, const std::string& source);
+
+// Reads a JSON file through parseJson; InputError naming the file when it is missing, unreadable
+// or not valid JSON.
 nlohmann::json readJsonFile(const std::string& path);
+
+// A value used as one component of a path (an experiment or tree name): non-empty, at most 100
+// characters from [A-Za-z0-9_.-], not "." or "..", so it can neither escape its folder nor
+// collide with the folder itself. InputError naming `what` otherwise; returns the value.
+const std::string& checkPathComponent(const std::string& value, const std::string& what);
 
 // Typed parameter structs describe their fields once, through a visitor, each with its range and
 // its documentation:

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 
@@ -27,14 +28,20 @@ inline constexpr int kExitInternalError = 1;
 inline constexpr int kExitBadInput = 2;
 
 // Runs a program's body (returning its exit code) under the contract: an InputError becomes one
-// line "<program>: <message>" on stderr and exit code 2, any other exception "internal error"
-// and 1.
+// line "<program>: <message>" on stderr and exit code 2, as does a filesystem error (a folder
+// that cannot be created, a file that cannot be moved: the user's disk, named by its path); any
+// other exception is "internal error" and 1.
 template <typename Body>
 int runWithExitCodes(const char* program, Body&& body) {
   try {
     return body();
   } catch (const InputError& error) {
     std::fprintf(stderr, "%s: %s\n", program, error.what());
+    return kExitBadInput;
+  } catch (const std::filesystem::filesystem_error& error) {
+    std::fprintf(stderr, "%s: %s: %s\n", program,
+                 error.path1().empty() ? "(file system)" : error.path1().c_str(),
+                 error.code().message().c_str());
     return kExitBadInput;
   } catch (const std::exception& error) {
     std::fprintf(stderr, "%s: internal error: %s\n", program, error.what());

@@ -6,30 +6,53 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <stdexcept>
 
 #include "common/atomic_file.h"
 #include "common/error.h"
+#include "common/third_party_output.h"
 
 namespace canopy {
 
 namespace {
 
+// The largest image Canopy decodes: a header may claim any size, and the pixels are allocated
+// before a truncated file is noticed.
+constexpr int kMaxImageSide = 16384;
+constexpr int64_t kMaxImagePixels = int64_t(1) << 26;  // 8192², 256 MiB as RGBA8
+
+// What went wrong, in one line: the library's own error, else what it printed.
+std::string libraryMessage(const std::string& error, CapturedStderr& printed) {
+  std::string message = asOneLine(error);
+  return message.empty() ? printed.release() : message;
+}
+
 // Decodes the first subimage of an opened input into 8-bit RGBA; `name` appears in errors.
-ImageRgba8 decodeImage(OIIO::ImageInput& input, const std::string& name) {
+ImageRgba8 decodeImage(OIIO::ImageInput& input, const std::string& name, CapturedStderr& printed,
+                       bool* hasAlpha = nullptr) {
   const OIIO::ImageSpec& spec = input.spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth != 1) {
     throwInputError("{}: unsupported image layout ({}x{}, {} channels)", name, spec.width,
                     spec.height, spec.nchannels);
   }
+  if (spec.width > kMaxImageSide || spec.height > kMaxImageSide ||
+      int64_t(spec.width) * spec.height > kMaxImagePixels) {
+    throwInputError(
+        "{}: {}×{} pixels is larger than Canopy reads (at most {} a side and {} "
+        "pixels)",
+        name, spec.width, spec.height, kMaxImageSide, kMaxImagePixels);
+  }
   const int channels = spec.nchannels;
   std::vector<uint8_t> raw(size_t(spec.width) * spec.height * channels);
   if (!input.read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, raw.data())) {
-    throwInputError("{}: truncated or corrupt image ({})", name, input.geterror());
+    throwInputError("{}: truncated or corrupt image ({})", name,
+                    libraryMessage(input.geterror(), printed));
   }
   ImageRgba8 image(spec.width, spec.height);
   const int alphaChannel = spec.alpha_channel >= 0 ? spec.alpha_channel : (channels == 4 ? 3 : -1);
+  if (hasAlpha) *hasAlpha = alphaChannel >= 0 || channels == 2;
   for (size_t i = 0; i < size_t(spec.width) * spec.height; ++i) {
     const uint8_t* src = &raw[i * channels];
     uint8_t* dst = &image.pixels[i * 4];
@@ -51,20 +74,32 @@ ImageRgba8 decodeImage(OIIO::ImageInput& input, const std::string& name) {
   return image;
 }
 
+// The extension OpenImageIO picks its reader by: the hint, or what the first bytes say (models
+// may leave the hint empty).
+std::string formatOf(const void* data, size_t size, const std::string& hint) {
+  if (!hint.empty()) return hint;
+  const auto* bytes = static_cast<const unsigned char*>(data);
+  if (size >= 8 && std::memcmp(bytes, "\x89PNG\r\n\x1a\n", 8) == 0) return "png";
+  if (size >= 3 && bytes[0] == 0xFF && bytes[1] == 0xD8 && bytes[2] == 0xFF) return "jpg";
+  return "png";  // the common case; a wrong guess reads as "not a readable image"
+}
+
 }  // namespace
 
-ImageRgba8 readImage(const std::filesystem::path& path) {
+ImageRgba8 readImage(const std::filesystem::path& path, bool* hasAlpha) {
   if (!std::filesystem::is_regular_file(path)) {
     throwInputError("{}: image file does not exist", path.string());
   }
   // Leaf textures keep straight alpha: OIIO would otherwise premultiply PNG colour on read.
   OIIO::ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);
+  CapturedStderr printed;  // libpng prints its errors itself; they belong in our message
   auto input = OIIO::ImageInput::open(path.string(), &config);
   if (!input) {
-    throwInputError("{}: not a readable image ({})", path.string(), OIIO::geterror());
+    throwInputError("{}: not a readable image ({})", path.string(),
+                    libraryMessage(OIIO::geterror(), printed));
   }
-  return decodeImage(*input, path.string());
+  return decodeImage(*input, path.string(), printed, hasAlpha);
 }
 
 ImageRgba8 readImageFromMemory(const void* data, size_t size, const std::string& formatHint,
@@ -72,9 +107,16 @@ ImageRgba8 readImageFromMemory(const void* data, size_t size, const std::string&
   OIIO::Filesystem::IOMemReader reader(data, size);
   OIIO::ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);
-  auto input = OIIO::ImageInput::open("embedded." + formatHint, &config, &reader);
-  if (!input) throwInputError("{}: not a readable image ({})", name, OIIO::geterror());
-  return decodeImage(*input, name);
+  // OpenImageIO 2.4's open() ignores its proxy argument (it then looks for a file named
+  // "embedded.png"); the proxy handed over in the config is honoured.
+  void* proxy = &reader;
+  config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+  CapturedStderr printed;
+  auto input = OIIO::ImageInput::open("embedded." + formatOf(data, size, formatHint), &config);
+  if (!input)
+    throwInputError("{}: not a readable image ({})", name,
+                    libraryMessage(OIIO::geterror(), printed));
+  return decodeImage(*input, name, printed);
 }
 
 void writePng(const std::filesystem::path& path, const ImageRgba8& image) {
@@ -87,7 +129,7 @@ void writePng(const std::filesystem::path& path, const ImageRgba8& image) {
     spec.attribute("oiio:UnassociatedAlpha", 1);  // our pixels are straight alpha: store as is
     if (!output->open(temporary.string(), spec) ||
         !output->write_image(OIIO::TypeDesc::UINT8, image.pixels.data()) || !output->close()) {
-      throw std::runtime_error(path.string() + ": cannot write PNG: " + output->geterror());
+      throwInputError("{}: cannot write PNG ({})", path.string(), asOneLine(output->geterror()));
     }
   });
 }

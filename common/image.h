@@ -38,8 +38,10 @@ struct ImageRgbaF {
 };
 
 // Reads any image OpenImageIO can read into 8-bit RGBA (grey → RGB, no alpha → opaque).
-// Throws InputError naming the file when it is missing or not an image.
-ImageRgba8 readImage(const std::filesystem::path& path);
+// Throws InputError naming the file when it is missing, not an image or larger than 8192² pixels;
+// what the image library prints on its own is folded into that message. `hasAlpha`, when given,
+// says whether the file had an alpha channel.
+ImageRgba8 readImage(const std::filesystem::path& path, bool* hasAlpha = nullptr);
 // The same for an image held in memory (e.g. embedded in a GLB); `formatHint` is an extension
 // such as "png", `name` what errors call it.
 ImageRgba8 readImageFromMemory(const void* data, size_t size, const std::string& formatHint,

@@ -10,8 +10,10 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <numeric>
+#include <sstream>
 #include <unordered_map>
 
 #include <spdlog/spdlog.h>
@@ -329,6 +331,32 @@ LeafTexture leafTextureOf(LoadContext& context, const aiMaterial& material) {
   return texture;
 }
 
+// Assimp loads an OBJ whose material library is missing as if it had no materials, and the
+// leaves are then reported as untextured; name the missing library instead.
+void checkObjMaterialLibraries(const fs::path& file) {
+  std::string extension = file.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  if (extension != ".obj") return;
+  std::ifstream in(file, std::ios::binary);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("mtllib", 0) != 0 || line.size() < 7 || !std::isspace(uint8_t(line[6])))
+      continue;
+    std::string names = line.substr(7);
+    while (!names.empty() && std::isspace(uint8_t(names.back()))) names.pop_back();
+    names.erase(0, names.find_first_not_of(" \t"));
+    if (names.empty() || fs::is_regular_file(file.parent_path() / names)) continue;
+    std::istringstream words(names);  // several libraries on one line
+    for (std::string name; words >> name;) {
+      if (!fs::is_regular_file(file.parent_path() / name)) {
+        throwInputError("{}: material library '{}' not found (looked for {})", file.string(), name,
+                        (file.parent_path() / name).string());
+      }
+    }
+  }
+}
+
 }  // namespace
 
 Tree loadTreeFile(const TreeFileOptions& options) {
@@ -338,6 +366,7 @@ Tree loadTreeFile(const TreeFileOptions& options) {
   }
   if (!fs::is_regular_file(file)) throwInputError("{}: file does not exist", file);
   if (fs::file_size(file) == 0) throwInputError("{}: file is empty", file);
+  checkObjMaterialLibraries(file);
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
                               aiPrimitiveType_POINT | aiPrimitiveType_LINE);
@@ -405,6 +434,10 @@ Tree loadTreeFile(const TreeFileOptions& options) {
       }
       addWood(mesh, it->second, zUp, tree.wood);
     }
+  }
+  if (tree.leaves.empty() && stats.degenerate > 0) {
+    throwInputError("{}: all {} leaf cards have zero area (nothing to draw)", file,
+                    stats.degenerate);
   }
   if (tree.leaves.empty()) {
     std::string names;

@@ -32,6 +32,7 @@ nlohmann::json TreeSpec::source() const {
 TreeSpec parseTreeSpec(ConfigObject& config, const std::string& baseDirectory) {
   TreeSpec spec;
   spec.name = config.get<std::string>("name", "");
+  if (!spec.name.empty()) checkPathComponent(spec.name, "config " + config.keyPath("name"));
   const bool hasPreset = config.has("preset"), hasFile = config.has("file"),
              hasCaptures = config.has("captures");
   if (int(hasPreset) + int(hasFile) + int(hasCaptures) != 1) {

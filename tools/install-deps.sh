@@ -3,7 +3,8 @@
 # As root it runs apt-get; otherwise it prints the exact command to run and fails.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
-list="$here/debian-packages.txt"
+# The package list: tools/debian-packages.txt, or the file given (tools/fuzz-packages.txt).
+list="${1:-$here/debian-packages.txt}"
 mapfile -t wanted < <(grep -v -e '^#' -e '^[[:space:]]*$' "$list")
 missing=()
 for pkg in "${wanted[@]}"; do

@@ -1,20 +1,20 @@
 #include "viewer/camera_recorder.h"
 
-#include <fstream>
+#include <filesystem>
 
 #include <fmt/format.h>
 
 #include "common/atomic_file.h"
 #include "common/camera_path.h"
+#include "common/config.h"
 #include "common/error.h"
 
 namespace canopy {
 
 void CameraRecorder::loadBookmarks() {
-  std::ifstream in(mBookmarksFile);
-  if (!in) return;
+  if (!std::filesystem::exists(mBookmarksFile)) return;
   try {
-    mBookmarks = nlohmann::json::parse(in).at("bookmarks").get<std::vector<nlohmann::json>>();
+    mBookmarks = readJsonFile(mBookmarksFile).at("bookmarks").get<std::vector<nlohmann::json>>();
   } catch (const nlohmann::json::exception& e) {
     throwInputError("{}: not a bookmarks file ({})", mBookmarksFile, e.what());
   }

@@ -5,6 +5,8 @@
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
+#include "common/command_line.h"
+#include "common/config.h"
 #include "common/error.h"
 #include "viewer/viewer.h"
 
@@ -15,7 +17,8 @@ int main(int argc, char** argv) {
   std::string params;
   app.add_option("--config", options.config, "experiment config: its trees and method variants");
   app.add_option("--tree", options.tree, "preset (broadleaf | shrub | sparse) or a tree file");
-  app.add_option("--leaves", options.leaves, "preset leaf count (0: the preset's)");
+  app.add_option("--leaves", options.leaves, "preset leaf count (0: the preset's)")
+      ->check(CLI::Range(0, 2'000'000));
   app.add_option("--method", options.method, "method to show first");
   app.add_option("--params", params, "the method's parameters as a JSON object");
   app.add_option("--width", options.width, "window width");
@@ -30,19 +33,10 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"method", "split", "error"}));
   app.add_option("--bookmarks", options.bookmarks, "camera bookmarks file (JSON)");
   app.add_option("--camera-path", options.cameraPath, "where a recorded camera path is saved");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& error) {
-    const int code = app.exit(error);
-    return code == 0 ? kExitOk : kExitBadInput;
-  }
+  if (const auto exitCode = parseCommandLine(app, "canopy-view", argc, argv)) return *exitCode;
   return runWithExitCodes("canopy-view", [&]() -> int {
     if (!params.empty()) {
-      try {
-        options.params = nlohmann::json::parse(params);
-      } catch (const nlohmann::json::exception& e) {
-        throwInputError("--params: not JSON ({})", e.what());
-      }
+      options.params = parseJson(params, "--params");
       if (!options.params.is_object()) throwInputError("--params: expected a JSON object");
     }
     if (options.width < 64 || options.height < 64 || options.width > 8192 || options.height > 8192)

@@ -12,6 +12,7 @@
 
 #include "bench/results_store.h"
 #include "common/config.h"
+#include "common/image.h"
 #include "test_support.h"
 
 namespace canopy {
@@ -111,6 +112,157 @@ TEST(BenchCli, BadInputExitsWithCode2AndOneLineNamingTheProblem) {
   EXPECT_EQ(test::runCommand(kBench + " --config " + (dir / "bad.json").string() + " --shard 3/2",
                              &error),
             2);
+}
+
+// What a hostile but realistic user tries: each ends with exit 2 and one line naming the culprit,
+// never a crash, an "internal error" or a run that silently does something else.
+struct HostileCase {
+  std::string what;     // for the failure message
+  std::string command;  // arguments after canopy-bench
+  std::string words;    // the message must contain these
+};
+
+void expectOneLineExit2(const HostileCase& c) {
+  std::string error;
+  const int code = test::runCommand(kBench + " --quiet " + c.command, &error);
+  EXPECT_EQ(code, 2) << c.what << ": " << error;
+  EXPECT_NE(error.find(c.words), std::string::npos) << c.what << ": " << error;
+  EXPECT_EQ(std::count(error.begin(), error.end(), '\n'), 1) << c.what << ": " << error;
+  EXPECT_EQ(error.find("internal error"), std::string::npos) << c.what << ": " << error;
+  EXPECT_LT(error.size(), 600u) << c.what << ": a long input is shortened";
+}
+
+TEST(BenchCli, HostileConfigsExitWithCode2NotACrashOrASilentDefault) {
+  test::TempDir dir;
+  const auto config = [&](const std::string& name, const std::string& text) {
+    test::writeText(dir / (name + ".json"), text);
+    return "--config " + (dir / (name + ".json")).string() + " --out " + (dir / "out").string();
+  };
+  const std::string deep(100000, '[');
+  const std::string closing(100000, ']');
+  const std::vector<HostileCase> cases = {
+      {"deep unknown key", config("deep", R"({"name": "x", "k": )" + deep + closing + "}"),
+       "deep.json: not valid JSON (nested deeper"},
+      {"deep name", config("deepname", R"({"name": )" + deep + closing + "}"), "deepname.json"},
+      {"long name", config("long", R"({"name": ")" + std::string(30000, 'a') + R"("})"),
+       "config name"},
+      {"number beyond double", config("huge", R"({"name": "x", "forests": {"fov_deg": 1e400}})"),
+       "huge.json: not valid JSON"},
+      {"integer that wraps", config("wrap", R"({"name": "x", "views": {"azimuths": 4294967297}})"),
+       "views.azimuths"},
+      {"duplicate key", config("dup", R"({"name": "x", "name": "y"})"), "appears twice"},
+      {"empty trees", config("notrees", R"({"name": "x", "trees": []})"), "config trees"},
+      {"empty methods", config("nomethods", R"({"name": "x", "methods": []})"), "config methods"},
+      {"name ..", config("dotdot", R"({"name": ".."})"), "config name"},
+      {"name .", config("dot", R"({"name": "."})"), "config name"},
+      {"config is a list", config("list", "[1, 2]"), "list.json"},
+      {"config is a folder", "--config " + dir.path().string(), dir.path().string()},
+      {"bad option", "--config x.json --frobnicate", "--frobnicate"},
+      {"huge shard count", config("valid", tinyConfig("valid")) + " --shard 0/99999999999",
+       "--shard"},
+      {"export-tree leaves < 0", "export-tree --leaves -1 --out " + (dir / "t").string(),
+       "--leaves"},
+      {"export-captures distance nan",
+       "export-captures --distance nan --out " + (dir / "c").string(), "--distance"},
+  };
+  for (const HostileCase& c : cases) expectOneLineExit2(c);
+  // A name of ".." must not have written into the folder above the results.
+  EXPECT_FALSE(std::filesystem::exists(dir / "metrics.jsonl"));
+}
+
+TEST(BenchCli, UnusableOutputFoldersAndRunFilesExitWithCode2NamingThePath) {
+  test::TempDir dir;
+  test::writeText(dir / "tiny.json", tinyConfig("tiny", 1));
+  test::writeText(dir / "a_file", "x");
+  const std::string config = "--config " + (dir / "tiny.json").string();
+  expectOneLineExit2({"out is a file", config + " --out " + (dir / "a_file").string(), "a_file"});
+  expectOneLineExit2(
+      {"out under a file", config + " --out " + (dir / "a_file" / "sub").string(), "a_file"});
+  // Even root cannot create folders in /proc: the permission-denied case on any machine.
+  expectOneLineExit2({"out not writable", config + " --out /proc/canopy_out", "/proc/canopy_out"});
+  // Run files of the wrong JSON type: report, merge and resume name the file.
+  const auto folder = dir / "wrong";
+  test::writeText(folder / "metrics.jsonl", "[1, 2]\n");
+  test::writeText(folder / "meta.json", R"({"experiment": 3})");
+  expectOneLineExit2({"report over wrong types", "report " + folder.string(), "wrong"});
+  expectOneLineExit2(
+      {"merge over wrong types", "merge " + (dir / "m").string() + " " + folder.string(), "wrong"});
+  expectOneLineExit2({"resume over wrong types", config + " --out " + folder.string(), "wrong"});
+  test::writeText(folder / "meta.json", "[1, 2]");
+  expectOneLineExit2({"meta.json a list", "report " + folder.string(), "meta.json"});
+  test::writeText(folder / "meta.json", R"({"experiment": "x", "experiment": "y"})");
+  expectOneLineExit2({"meta.json duplicate key", "report " + folder.string(), "appears twice"});
+}
+
+TEST(BenchCli, RenderDrawsASavedAssetAsTheRunDrewItAndNamesCorruptFiles) {
+  test::TempDir dir;
+  test::writeText(dir / "tiny.json", R"({"name": "tiny",
+    "trees": [{"preset": "sparse", "seed": 3, "leaves": 300}],
+    "methods": [{"method": "polygonal"}, {"method": "billboard_cloud"}],
+    "views": {"resolution": [64, 64], "distances": [3], "elevations": [30], "azimuths": 1},
+    "forests": {"sizes": [1], "frames": 3, "warmup": 1}})");
+  const std::string run = (dir / "run").string();
+  const std::string config = " --config " + (dir / "tiny.json").string();
+  ASSERT_EQ(test::runCommand(kBench + " --quiet" + config + " --out " + run), 0);
+  const auto render = [&](const std::string& variant, const std::string& view, std::string* error) {
+    return test::runCommand(kBench + " --quiet render" + config + " --run " + run +
+                                " --tree sparse_s3_l300 --variant " + variant + " --view " + view +
+                                " --image " + (dir / "render.png").string(),
+                            error);
+  };
+  for (const char* variant : {"polygonal", "billboard_cloud"}) {
+    std::string error;
+    ASSERT_EQ(render(variant, "d3_e30_a0", &error), 0) << error;
+    const ImageRgba8 drawn = readImage(dir / "render.png");
+    const ImageRgba8 measured =
+        readImage(dir / "run" / "images" / "sparse_s3_l300" / variant / "d3_e30_a0.png");
+    ASSERT_EQ(drawn.width, measured.width);
+    int worst = 0;
+    for (size_t i = 0; i < drawn.pixels.size(); ++i)
+      worst = std::max(worst, std::abs(int(drawn.pixels[i]) - int(measured.pixels[i])));
+    // The same asset, camera and renderer: the saved impostor is the measured one.
+    EXPECT_LE(worst, 1) << variant;
+  }
+  std::string error;
+  EXPECT_EQ(render("billboard_cloud", "d9_e0_a0", &error), 2);
+  EXPECT_NE(error.find("--view: 'd9_e0_a0' is not in the config"), std::string::npos) << error;
+  EXPECT_EQ(render("impostor9000", "d3_e30_a0", &error), 2);
+  EXPECT_NE(error.find("--variant"), std::string::npos) << error;
+  // Corrupt assets: each is exit 2 with one line naming the file.
+  const auto asset = dir / "run" / "assets" / "sparse_s3_l300" / "billboard_cloud";
+  const auto expectCorrupt = [&](const std::string& file, const std::string& content,
+                                 const std::string& words) {
+    const std::string saved = test::readText(asset / file);
+    if (content.empty())
+      std::filesystem::remove(asset / file);
+    else
+      test::writeText(asset / file, content);
+    std::string message;
+    EXPECT_EQ(render("billboard_cloud", "d3_e30_a0", &message), 2) << file << ": " << message;
+    EXPECT_NE(message.find(words), std::string::npos) << file << ": " << message;
+    EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 1) << message;
+    test::writeText(asset / file, saved);
+  };
+  expectCorrupt("atlas.png", "", "atlas.png");
+  expectCorrupt("atlas.png", "not a png", "atlas.png");
+  expectCorrupt("asset.json", "{\"method\": ", "asset.json");
+  expectCorrupt("asset.json", "", "asset.json");
+  expectCorrupt("indices.bin", "abc", "indices.bin");
+  expectCorrupt("indices.bin", std::string(400, '\xff'), "billboard_cloud");
+  ASSERT_EQ(render("billboard_cloud", "d3_e30_a0", &error), 0) << "restored: " << error;
+  // A run folder of another config: its assets would not match.
+  test::writeText(dir / "other.json", tinyConfig("other", 1));
+  ASSERT_EQ(test::runCommand(kBench + " --quiet --no-images --config " +
+                             (dir / "other.json").string() + " --out " + (dir / "o").string()),
+            0);
+  EXPECT_EQ(
+      test::runCommand(kBench + " --quiet render" + config + " --run " + (dir / "o").string() +
+                           " --tree sparse_s3_l300 --variant polygonal --view d3_e30_a0 "
+                           "--image " +
+                           (dir / "x.png").string(),
+                       &error),
+      2);
+  EXPECT_NE(error.find("not of"), std::string::npos) << error;
 }
 
 TEST(BenchCli, ShardsTogetherMakeTheWholeRun) {

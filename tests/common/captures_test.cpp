@@ -2,6 +2,7 @@
 // input naming its file.
 #include <gtest/gtest.h>
 
+#include <OpenImageIO/imageio.h>
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
 
@@ -116,6 +117,51 @@ TEST(NerfCaptures, BadInputIsAnErrorNamingTheFile) {
   // Missing transforms file.
   std::filesystem::remove(dir / "transforms_train.json");
   expectErrorNaming(dir.path(), "transforms_train.json");
+}
+
+// A frame whose matrix is 4×4 and finite but no camera pose.
+void expectMatrixRejected(const std::string& matrix, const std::string& words) {
+  test::TempDir dir;
+  writeNerfCaptures(dir.path(), ring(4, 32), ring(2, 32));
+  test::writeText(dir / "transforms_train.json",
+                  R"({"camera_angle_x": 0.7, "frames": [{"file_path": "./train/r_0",
+                      "transform_matrix": )" +
+                      matrix + "}]}");
+  expectErrorNaming(dir.path(), "transforms_train.json: frames[0]");
+  expectErrorNaming(dir.path(), words);
+}
+
+TEST(NerfCaptures, MatricesThatAreNoCameraPoseAreRejected) {
+  // Rank 2: the backward axis is the right axis again.
+  expectMatrixRejected("[[1, 0, 1, 0], [0, 1, 0, 0], [0, 0, 0, 4], [0, 0, 0, 1]]", "rank");
+  // All zero rotation.
+  expectMatrixRejected("[[0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 4], [0, 0, 0, 1]]", "rank");
+  // A projective last row.
+  expectMatrixRejected("[[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 4], [0, 0, 1, 1]]", "last row");
+  // Strings where numbers belong.
+  expectMatrixRejected(R"([["1", 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 4], [0, 0, 0, 1]])", "4×4");
+}
+
+TEST(NerfCaptures, ImagesWithoutAlphaAreRejectedNotTakenAsOpaque) {
+  test::TempDir dir;
+  writeNerfCaptures(dir.path(), ring(4, 32), ring(2, 32));
+  // Overwrite one image with an RGB PNG of the same size: no coverage information.
+  auto output = OIIO::ImageOutput::create("png");
+  ASSERT_TRUE(output);
+  const std::vector<uint8_t> rgb(32 * 32 * 3, 128);
+  const std::string path = (dir / "test" / "r_1.png").string();
+  ASSERT_TRUE(output->open(path, OIIO::ImageSpec(32, 32, 3, OIIO::TypeDesc::UINT8)));
+  ASSERT_TRUE(output->write_image(OIIO::TypeDesc::UINT8, rgb.data()));
+  ASSERT_TRUE(output->close());
+  expectErrorNaming(dir.path(), "r_1.png: no alpha channel");
+}
+
+TEST(NerfCaptures, DuplicateKeysAreRejected) {
+  test::TempDir dir;
+  writeNerfCaptures(dir.path(), ring(4, 32), ring(2, 32));
+  test::writeText(dir / "transforms_test.json",
+                  R"({"camera_angle_x": 0.7, "camera_angle_x": 0.2, "frames": []})");
+  expectErrorNaming(dir.path(), "appears twice");
 }
 
 }  // namespace

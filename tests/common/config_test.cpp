@@ -44,6 +44,63 @@ TEST(Config, OutOfRangeAndWrongTypesAreErrors) {
   EXPECT_NE(errorOf(json::object()).find("name"), std::string::npos);
 }
 
+// The message of parseJson on `text`, or "" when it parsed.
+std::string jsonErrorOf(const std::string& text) {
+  try {
+    parseJson(text, "in.json");
+  } catch (const InputError& error) {
+    return error.what();
+  }
+  return "";
+}
+
+TEST(Json, HostileTextIsAnErrorNamingTheSourceNotACrash) {
+  const std::string deep(100000, '[');
+  EXPECT_NE(jsonErrorOf(R"({"name": "x", "k": )" + deep + std::string(100000, ']') + "}")
+                .find("in.json: not valid JSON (nested deeper than 64 levels)"),
+            std::string::npos);
+  EXPECT_NE(jsonErrorOf(R"({"name": )" + deep).find("in.json"), std::string::npos);
+  EXPECT_NE(
+      jsonErrorOf(R"({"name": "a", "views": {}, "name": "b"})").find("\"name\" appears twice"),
+      std::string::npos);
+  // The same key in two different objects is fine, in nested and sibling objects alike.
+  EXPECT_EQ(jsonErrorOf(R"({"a": {"a": 1, "b": {"a": 2}}, "b": [{"a": 1}, {"a": 2}]})"), "");
+  EXPECT_NE(jsonErrorOf(R"({"fov_deg": 1e400})").find("in.json: not valid JSON"),
+            std::string::npos);
+  const std::string message = jsonErrorOf(R"({"a": tru})");
+  EXPECT_EQ(message.find("[json.exception"), std::string::npos) << message;
+  EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  // 64 levels still parse: real files nest a handful.
+  EXPECT_EQ(jsonErrorOf(std::string(64, '[') + std::string(64, ']')), "");
+  EXPECT_NE(jsonErrorOf(std::string(65, '[') + std::string(65, ']')), "");
+}
+
+TEST(Config, NamesThatArePathComponentsCannotEscapeTheirFolder) {
+  for (const std::string& name :
+       std::vector<std::string>{".", "..", "", "a/b", "../up", std::string(30000, 'a')}) {
+    const std::string error = errorOf({{"name", name}});
+    EXPECT_NE(error.find("config name"), std::string::npos) << name.substr(0, 20) << ": " << error;
+    EXPECT_LT(error.size(), 300u) << "a long name is shortened in the message";
+  }
+  EXPECT_EQ(errorOf({{"name", "run-1.b_2"}}), "");
+  const std::string tree =
+      errorOf({{"name", "x"}, {"trees", {{{"preset", "sparse"}, {"name", ".."}}}}});
+  EXPECT_NE(tree.find("trees[0].name"), std::string::npos) << tree;
+}
+
+TEST(Config, EmptyListsThatWouldRunNothingAreErrors) {
+  EXPECT_NE(errorOf({{"name", "x"}, {"trees", json::array()}}).find("config trees"),
+            std::string::npos);
+  EXPECT_NE(errorOf({{"name", "x"}, {"methods", json::array()}}).find("config methods"),
+            std::string::npos);
+  for (const char* list : {"distances", "elevations"}) {
+    EXPECT_NE(errorOf({{"name", "x"}, {"views", {{list, json::array()}}}}).find(list),
+              std::string::npos);
+  }
+  EXPECT_NE(errorOf({{"name", "x"}, {"forests", {{"sizes", json::array()}}}}).find("forests.sizes"),
+            std::string::npos);
+}
+
 TEST(Config, FairHarnessSettingsAreCheckedAndNamed) {
   EXPECT_NE(
       errorOf({{"name", "x"}, {"views", {{"closeups", {{"fov", 8}}}}}}).find("views.closeups.fov"),

@@ -181,37 +181,123 @@ std::string base64(const std::string& bytes) {
   return out;
 }
 
-TEST(TreeLoader, GltfWithAlphaMaskMaterial) {
-  test::TempDir dir;
-  writeLeafPng(dir / "leaf.png");
-  // One leaf quad (positions, uvs, indices) in a data-URI buffer; material named "Mat.001"
-  // (no leaf word) with alphaMode MASK, so the alpha rule must find it.
-  const float positions[] = {0, 0, 0, 0.4f, 0, 0, 0.4f, 0.2f, 0, 0, 0.2f, 0};
-  const float uvs[] = {0, 1, 1, 1, 1, 0, 0, 0};
-  const uint16_t indices[] = {0, 1, 2, 0, 2, 3};
-  std::string buffer(reinterpret_cast<const char*>(positions), sizeof positions);
-  buffer.append(reinterpret_cast<const char*>(uvs), sizeof uvs);
-  buffer.append(reinterpret_cast<const char*>(indices), sizeof indices);
-  const std::string gltf = R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+// A PNG whose IHDR claims 60000 × 60000 RGBA pixels, followed by a few bytes of image data: a
+// reader learns the size before it finds the data missing.
+std::string hugePngHeader() {
+  const auto bigEndian = [](uint32_t v) {
+    return std::string{char(v >> 24), char(v >> 16), char(v >> 8), char(v)};
+  };
+  const auto chunk = [&](const std::string& typeAndData) {
+    uint32_t crc = 0xFFFFFFFFu;  // CRC-32 of the chunk type and data, as PNG requires
+    for (unsigned char byte : typeAndData) {
+      crc ^= byte;
+      for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+    }
+    return bigEndian(uint32_t(typeAndData.size() - 4)) + typeAndData + bigEndian(~crc);
+  };
+  return std::string("\x89PNG\r\n\x1a\n", 8) +
+         chunk("IHDR" + bigEndian(60000) + bigEndian(60000) + std::string("\x08\x06\0\0\0", 5)) +
+         chunk("IDAT" + std::string("\x78\x01\x00\x00", 4)) + chunk("IEND");
+}
+
+// One leaf quad (positions, uvs, indices) as glTF; material named "Mat.001" (no leaf word) with
+// alphaMode MASK, so the alpha rule must find it. The leaf texture is `png`, stored as the
+// `placement` says: a file beside the model, a data URI, or (GLB) a buffer view of the binary
+// chunk.
+enum class ImagePlacement { kFile, kDataUri, kGlbBufferView };
+
+std::string leafQuadGltfJson(const std::string& images, const std::string& buffers,
+                             const std::string& extraBufferViews) {
+  return R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
   "nodes": [{"mesh": 0}], "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1},
   "indices": 2, "material": 0}]}],
   "materials": [{"name": "Mat.001", "alphaMode": "MASK", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
-  "textures": [{"source": 0}], "images": [{"uri": "leaf.png"}],
-  "buffers": [{"byteLength": 92, "uri": "data:application/octet-stream;base64,)" +
-                           base64(buffer) + R"("}],
+  "textures": [{"source": 0}], "images": [)" +
+         images + R"(], "buffers": [)" + buffers + R"(],
   "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 32},
-                  {"buffer": 0, "byteOffset": 80, "byteLength": 12}],
+                  {"buffer": 0, "byteOffset": 80, "byteLength": 12})" +
+         extraBufferViews + R"(],
   "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [0.4, 0.2, 0]},
                 {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
                 {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}]})";
-  test::writeText(dir / "leaf.gltf", gltf);
-  const Tree tree = loadTreeFile({(dir / "leaf.gltf").string()});
+}
+
+// GLB container: 12-byte header, a JSON chunk padded with spaces, a BIN chunk padded with zeros.
+std::string glbContainer(std::string json, std::string binary) {
+  json.resize((json.size() + 3) / 4 * 4, ' ');
+  binary.resize((binary.size() + 3) / 4 * 4, '\0');
+  std::string out;
+  const auto word = [&](uint32_t value) { out.append(reinterpret_cast<const char*>(&value), 4); };
+  word(0x46546C67);  // "glTF"
+  word(2);
+  word(uint32_t(12 + 8 + json.size() + 8 + binary.size()));
+  word(uint32_t(json.size()));
+  word(0x4E4F534A);  // "JSON"
+  out += json;
+  word(uint32_t(binary.size()));
+  word(0x004E4942);  // "BIN\0"
+  out += binary;
+  return out;
+}
+
+std::filesystem::path writeLeafQuadModel(const test::TempDir& dir, ImagePlacement placement) {
+  const float positions[] = {0, 0, 0, 0.4f, 0, 0, 0.4f, 0.2f, 0, 0, 0.2f, 0};
+  const float uvs[] = {0, 1, 1, 1, 1, 0, 0, 0};
+  const uint16_t indices[] = {0, 1, 2, 0, 2, 3};
+  std::string geometry(reinterpret_cast<const char*>(positions), sizeof positions);
+  geometry.append(reinterpret_cast<const char*>(uvs), sizeof uvs);
+  geometry.append(reinterpret_cast<const char*>(indices), sizeof indices);
+  writeLeafPng(dir / "leaf.png");
+  const std::string png = test::readText(dir / "leaf.png");
+  const std::string dataBuffer =
+      R"({"byteLength": 92, "uri": "data:application/octet-stream;base64,)" + base64(geometry) +
+      R"("})";
+  if (placement == ImagePlacement::kFile) {
+    test::writeText(dir / "leaf.gltf", leafQuadGltfJson(R"({"uri": "leaf.png"})", dataBuffer, ""));
+    return dir / "leaf.gltf";
+  }
+  std::filesystem::remove(dir / "leaf.png");  // the model must not find it beside itself
+  if (placement == ImagePlacement::kDataUri) {
+    const std::string image = R"({"uri": "data:image/png;base64,)" + base64(png) + R"("})";
+    test::writeText(dir / "leaf.gltf", leafQuadGltfJson(image, dataBuffer, ""));
+    return dir / "leaf.gltf";
+  }
+  const std::string binary = geometry + png;
+  const std::string json = leafQuadGltfJson(
+      R"({"bufferView": 3, "mimeType": "image/png"})",
+      R"({"byteLength": )" + std::to_string(binary.size()) + "}",
+      R"(, {"buffer": 0, "byteOffset": 92, "byteLength": )" + std::to_string(png.size()) + "}");
+  test::writeText(dir / "leaf.glb", glbContainer(json, binary));
+  return dir / "leaf.glb";
+}
+
+void expectOneLeafQuad(const std::filesystem::path& model) {
+  const Tree tree = loadTreeFile({model.string()});
   ASSERT_EQ(tree.leaves.size(), 1u);
   EXPECT_NEAR(tree.leaves[0].halfExtents.x, 0.2f, 1e-5f);
   EXPECT_NEAR(tree.leaves[0].halfExtents.y, 0.1f, 1e-5f);
-  EXPECT_EQ(tree.leafTextures[0].front.width, 8);
+  ASSERT_EQ(tree.leafTextures[0].front.width, 8);
+  // The texture's alpha survives (columns 2..5 opaque), wherever it was stored.
+  EXPECT_EQ(tree.leafTextures[0].front.at(0, 4)[3], 0);
+  EXPECT_EQ(tree.leafTextures[0].front.at(3, 4)[3], 255);
   // glTF's uv v = 0 is the top image row, as in Canopy: the quad's top edge (y = 0.2) has v = 0.
   EXPECT_NEAR(glm::dot(tree.leaves[0].axisV, glm::vec3(0, -1, 0)), 1.0f, 1e-5f);
+}
+
+TEST(TreeLoader, GltfWithAlphaMaskMaterial) {
+  test::TempDir dir;
+  expectOneLeafQuad(writeLeafQuadModel(dir, ImagePlacement::kFile));
+}
+
+// Downloaded assets usually carry their textures inside the file.
+TEST(TreeLoader, GltfWithTextureInADataUri) {
+  test::TempDir dir;
+  expectOneLeafQuad(writeLeafQuadModel(dir, ImagePlacement::kDataUri));
+}
+
+TEST(TreeLoader, GlbWithTextureInItsBinaryChunk) {
+  test::TempDir dir;
+  expectOneLeafQuad(writeLeafQuadModel(dir, ImagePlacement::kGlbBufferView));
 }
 
 // Each bad input gives an InputError whose message names the file and the problem.
@@ -264,6 +350,39 @@ TEST(TreeLoaderBadInput, ModelWithoutLeaves) {
   Fixture f("newmtl bark\nKd 1 1 1\n",
             "mtllib tree.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl bark\nf 1 2 3\n");
   expectInputError(f.obj, "no leaves");
+}
+
+TEST(TreeLoaderBadInput, MissingMaterialLibraryIsNamed) {
+  Fixture f(kBlenderMtl, kBlenderObj);
+  std::filesystem::remove(f.dir / "tree.mtl");
+  expectInputError(f.obj, "material library 'tree.mtl' not found");
+}
+
+TEST(TreeLoaderBadInput, LeavesOfZeroAreaAreNamedAsSuch) {
+  std::string obj = kBlenderObj;
+  // Every leaf quad collapsed onto a line (all y = 1, 1.1 → the same value).
+  for (const char* from : {"1.1 0\n", "2.1 0\n"}) {
+    for (size_t at; (at = obj.find(from)) != std::string::npos;)
+      obj.replace(at, std::string(from).size(), std::string(from) == "1.1 0\n" ? "1 0\n" : "2 0\n");
+  }
+  Fixture f(kBlenderMtl, obj);
+  expectInputError(f.obj, "zero area");
+}
+
+TEST(TreeLoaderBadInput, CorruptAndOversizedTexturesGiveOneLineAndPrintNothing) {
+  Fixture f(kBlenderMtl, kBlenderObj);
+  const std::string png = test::readText(f.dir / "leaf.png");
+  // Truncated in the image data, and a header claiming 60000² pixels: libpng prints its own
+  // "libpng error" line unless it is captured into our message.
+  for (const std::string& bad : {png.substr(0, png.size() - 20), hugePngHeader()}) {
+    test::writeText(f.dir / "leaf.png", bad);
+    ::testing::internal::CaptureStderr();
+    expectInputError(f.obj, "leaf.png");
+    const std::string printed = ::testing::internal::GetCapturedStderr();
+    EXPECT_EQ(printed, "") << "a library printed on its own";
+  }
+  test::writeText(f.dir / "leaf.png", hugePngHeader());
+  expectInputError(f.obj, "60000×60000 pixels is larger than Canopy reads");
 }
 
 TEST(TreeLoader, LeafRuleMatchesCommonNames) {

@@ -106,6 +106,18 @@ TEST(Viewer, BadInputIsOneLineAndExitCode2) {
       test::runCommand(kView + " --method bbox_hierarchy --params '{\"texture_size\": 0}'", &error),
       2);
   EXPECT_NE(error.find("texture_size"), std::string::npos) << error;
+  // Out-of-range and malformed options, hostile --params: one line, exit 2, no window needed.
+  for (const auto& [options, words] : std::vector<std::pair<std::string, std::string>>{
+           {"--leaves -1", "--leaves"},
+           {"--leaves 4294967297", "--leaves"},
+           {"--frobnicate", "--frobnicate"},
+           {R"(--params '{"a": 1, "a": 2}')", "appears twice"},
+           {"--params '" + std::string(100, '[') + "'", "--params"},
+           {"--width 1e400", "--width"}}) {
+    EXPECT_EQ(test::runCommand(kView + " " + options, &error), 2) << options << ": " << error;
+    EXPECT_NE(error.find(words), std::string::npos) << options << ": " << error;
+    EXPECT_EQ(errorLines(error), 1) << options << ": " << error;
+  }
   // A screenshot into a folder that does not exist names the folder.
   EXPECT_EQ(test::runCommand("xvfb-run -a " + kView +
                                  " --tree sparse --leaves 200 --hide-ui --frames 1 --screenshot " +
