@@ -127,7 +127,8 @@ class AssetFolder {
     if (bytes.size() % sizeof(T) != 0)
       throwInputError("{}/{}: truncated blob", mFolder.string(), name);
     std::vector<T> values(bytes.size() / sizeof(T));
-    std::memcpy(values.data(), bytes.data(), bytes.size());
+    // An empty blob has no buffer: memcpy from a null pointer is undefined even for 0 bytes.
+    if (!bytes.empty()) std::memcpy(values.data(), bytes.data(), bytes.size());
     return values;
   }
 

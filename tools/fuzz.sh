@@ -19,13 +19,16 @@ run_one() {
   local target=$1 seconds=$2
   local corpus=build/fuzz/corpus/$target crashes=build/fuzz/crashes/$target
   mkdir -p "$corpus" "$crashes"
+  # The committed seeds and every input that once found a bug start each run.
+  local inputs=("tests/fuzz/corpus/$target")
+  [[ -d tests/fuzz/regressions/$target ]] && inputs+=("tests/fuzz/regressions/$target")
   # Mesa (the asset loader bakes its seed assets through OSMesa) keeps allocations until exit.
   local leaks=1
   [[ $target == asset_loader ]] && leaks=0
   if ASAN_OPTIONS="detect_leaks=$leaks:abort_on_error=1" \
      build/fuzz/bin/fuzz_"$target" -max_total_time="$seconds" -timeout=60 -rss_limit_mb=6144 \
        -detect_leaks=$leaks -print_final_stats=1 -artifact_prefix="$crashes/" \
-       "$corpus" "tests/fuzz/corpus/$target" > "build/fuzz/logs/$target.log" 2>&1; then
+       "$corpus" "${inputs[@]}" > "build/fuzz/logs/$target.log" 2>&1; then
     status=ok
   else
     status=CRASH

@@ -148,37 +148,50 @@ void runCameraPath(const uint8_t* data, size_t size) {
 
 namespace {
 
-// One baked asset per registered method, of a tiny tree, saved by the runner as a run saves it.
+// One baked asset per registered method, of a tiny tree at small settings (the bake runs once,
+// under the sanitizers), saved by the runner as a run saves it.
 struct BakedAssets {
   std::vector<std::string> methods;
+  std::vector<nlohmann::json> params;  // what each was baked with (load may check them)
   std::vector<fs::path> folders;
   std::vector<std::vector<fs::path>> files;  // each folder's files, sorted
 };
+
+nlohmann::json smallParams(const std::string& method) {
+  if (method == "billboard_cloud" || method == "single_leaf_indirect" ||
+      method == "multilayer_indirect")
+    return {{"clusters", 20}};
+  if (method == "bbox_hierarchy") return {{"texture_size", 16}};
+  if (method == "volumetric_opacity")
+    return {{"views", 6}, {"capture_resolution", 64}, {"level", 2}};
+  return nlohmann::json::object();
+}
 
 const BakedAssets& bakedAssets() {
   static const BakedAssets assets = [] {
     BakedAssets result;
     const fs::path run = scratch() / "assets_run";
-    std::string methods;
+    nlohmann::json methods = nlohmann::json::array();
     for (const std::string& name : builtinMethods().names())
-      methods += (methods.empty() ? "" : ", ") + std::string(R"({"method": ")") + name + "\"}";
-    const nlohmann::json config = parseJson(
-        R"({"name": "fuzz", "trees": [{"preset": "sparse", "seed": 2, "leaves": 400}],
-            "methods": [)" +
-            methods + R"(],
+      methods.push_back({{"method", name}, {"params", smallParams(name)}});
+    nlohmann::json config = parseJson(
+        R"({"name": "fuzz", "trees": [{"preset": "sparse", "seed": 2, "leaves": 100}],
             "views": {"resolution": [32, 32], "supersample": 1, "distances": [3],
                       "elevations": [20], "azimuths": 1},
             "forests": {"sizes": [1], "frames": 1, "warmup": 0, "blocks": 1}})",
         "fuzz assets config");
+    config["methods"] = methods;
     RunOptions options;
     options.outDirectory = run;
     options.saveImages = false;
     options.printTable = false;
-    runExperiment(parseExperimentConfig(config, ""), options);
-    const fs::path treeFolder = run / "assets" / safeName("sparse_s2_l400");
-    for (const std::string& name : builtinMethods().names()) {
-      result.methods.push_back(name);
-      result.folders.push_back(treeFolder / safeName(name));
+    const ExperimentConfig experiment = parseExperimentConfig(config, "");
+    runExperiment(experiment, options);
+    const fs::path treeFolder = run / "assets" / safeName("sparse_s2_l100");
+    for (const MethodVariant& variant : experiment.variants) {
+      result.methods.push_back(variant.method);
+      result.params.push_back(variant.params);
+      result.folders.push_back(treeFolder / safeName(variant.label));
       std::vector<fs::path> files;
       for (const auto& entry : fs::directory_iterator(result.folders.back()))
         if (entry.is_regular_file()) files.push_back(entry.path());
@@ -208,7 +221,7 @@ void runAssetLoader(const uint8_t* data, size_t size) {
   const std::string original = readAll(file);
   writeBytes(file, data + 2, size - 2);
   expectNoBug([&] {
-    auto method = builtinMethods().find(assets.methods[m]).create(nlohmann::json::object(), "fuzz");
+    auto method = builtinMethods().find(assets.methods[m]).create(assets.params[m], "fuzz");
     AssetFolder folder(assets.folders[m]);
     method->load(folder);
   });
