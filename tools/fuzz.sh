@@ -26,6 +26,7 @@ run_one() {
   local leaks=1
   [[ $target == asset_loader ]] && leaks=0
   if ASAN_OPTIONS="detect_leaks=$leaks:abort_on_error=1" \
+     LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp:print_suppressions=0" \
      build/fuzz/bin/fuzz_"$target" -max_total_time="$seconds" -timeout=60 -rss_limit_mb=6144 \
        -detect_leaks=$leaks -print_final_stats=1 -artifact_prefix="$crashes/" \
        "$corpus" "${inputs[@]}" > "build/fuzz/logs/$target.log" 2>&1; then
