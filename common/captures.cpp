@@ -13,6 +13,7 @@
 #include "common/atomic_file.h"
 #include "common/config.h"
 #include "common/error.h"
+#include "common/file_checks.h"
 
 namespace canopy {
 
@@ -201,7 +202,7 @@ glm::mat4 readCameraToWorld(const nlohmann::json& m, const std::string& where) {
 std::vector<CapturedView> readTransforms(const std::filesystem::path& folder,
                                          const std::string& fileName, glm::ivec2& size) {
   const std::filesystem::path path = folder / fileName;
-  if (!std::filesystem::exists(path))
+  if (!pathExists(path))
     throwInputError("{}: missing (a NeRF capture folder needs it)", path.string());
   const nlohmann::json json = readJsonFile(path.string());
   std::vector<CapturedView> views;

@@ -12,6 +12,7 @@
 
 #include "common/atomic_file.h"
 #include "common/error.h"
+#include "common/file_checks.h"
 #include "common/third_party_output.h"
 
 namespace canopy {
@@ -87,7 +88,7 @@ std::string formatOf(const void* data, size_t size, const std::string& hint) {
 }  // namespace
 
 ImageRgba8 readImage(const std::filesystem::path& path, bool* hasAlpha) {
-  if (!std::filesystem::is_regular_file(path)) {
+  if (!regularFileExists(path)) {
     throwInputError("{}: image file does not exist", path.string());
   }
   // Leaf textures keep straight alpha: OIIO would otherwise premultiply PNG colour on read.

@@ -20,6 +20,7 @@
 #include <glm/geometric.hpp>
 
 #include "common/error.h"
+#include "common/file_checks.h"
 #include "common/image.h"
 
 namespace canopy {
@@ -98,7 +99,7 @@ const ImageRgba8& loadTexture(LoadContext& context, const std::string& reference
       fs::path(relative).is_absolute() ? fs::path(relative) : context.directory / relative;
   auto [it, inserted] = context.imageCache.try_emplace(resolved.string());
   if (inserted) {
-    if (!fs::is_regular_file(resolved)) {
+    if (!regularFileExists(resolved)) {
       context.imageCache.erase(it);
       throwInputError("{}: texture '{}' of material '{}' not found (looked for {})", file,
                       reference, material, resolved.string());
@@ -346,10 +347,10 @@ void checkObjMaterialLibraries(const fs::path& file) {
     std::string names = line.substr(7);
     while (!names.empty() && std::isspace(uint8_t(names.back()))) names.pop_back();
     names.erase(0, names.find_first_not_of(" \t"));
-    if (names.empty() || fs::is_regular_file(file.parent_path() / names)) continue;
+    if (names.empty() || regularFileExists(file.parent_path() / names)) continue;
     std::istringstream words(names);  // several libraries on one line
     for (std::string name; words >> name;) {
-      if (!fs::is_regular_file(file.parent_path() / name)) {
+      if (!regularFileExists(file.parent_path() / name)) {
         throwInputError("{}: material library '{}' not found (looked for {})", file.string(), name,
                         (file.parent_path() / name).string());
       }
@@ -364,8 +365,10 @@ Tree loadTreeFile(const TreeFileOptions& options) {
   if (options.up != "y" && options.up != "z") {
     throwInputError(R"({}: up axis '{}' must be "y" or "z")", file, options.up);
   }
-  if (!fs::is_regular_file(file)) throwInputError("{}: file does not exist", file);
-  if (fs::file_size(file) == 0) throwInputError("{}: file is empty", file);
+  if (!regularFileExists(file)) throwInputError("{}: file does not exist", file);
+  std::error_code sizeError;
+  if (fs::file_size(file, sizeError) == 0 || sizeError)
+    throwInputError("{}: file is empty or unreadable", file);
   checkObjMaterialLibraries(file);
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,

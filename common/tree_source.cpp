@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/captures.h"
+#include "common/file_checks.h"
 #include "common/lsystem.h"
 
 namespace canopy {
@@ -42,7 +43,7 @@ TreeSpec parseTreeSpec(ConfigObject& config, const std::string& baseDirectory) {
   if (hasCaptures) {
     spec.kind = TreeSpec::Kind::kCaptures;
     std::filesystem::path path = config.get<std::string>("captures");
-    if (path.is_relative() && !baseDirectory.empty() && !std::filesystem::exists(path))
+    if (path.is_relative() && !baseDirectory.empty() && !pathExists(path))
       path = std::filesystem::path(baseDirectory) / path;
     spec.captures = path.string();
   } else if (hasPreset) {
@@ -60,7 +61,7 @@ TreeSpec parseTreeSpec(ConfigObject& config, const std::string& baseDirectory) {
   } else {
     spec.kind = TreeSpec::Kind::kFile;
     std::filesystem::path path = config.get<std::string>("file");
-    if (path.is_relative() && !baseDirectory.empty() && !std::filesystem::exists(path)) {
+    if (path.is_relative() && !baseDirectory.empty() && !pathExists(path)) {
       path = std::filesystem::path(baseDirectory) / path;
     }
     spec.file.path = path.string();

@@ -356,6 +356,10 @@ TEST(TreeLoaderBadInput, MissingMaterialLibraryIsNamed) {
   Fixture f(kBlenderMtl, kBlenderObj);
   std::filesystem::remove(f.dir / "tree.mtl");
   expectInputError(f.obj, "material library 'tree.mtl' not found");
+  // A name longer than the system allows (found by the tree_loader fuzz target: the existence
+  // check threw filesystem_error) is a library that is not found, too.
+  test::writeText(f.obj, "mtllib " + std::string(5000, 'm') + "\n" + kBlenderObj);
+  expectInputError(f.obj, "not found");
 }
 
 TEST(TreeLoaderBadInput, LeavesOfZeroAreaAreNamedAsSuch) {
