@@ -87,14 +87,15 @@ struct ForestTiming {
   }
 };
 
-// Blocks of reference and method frames alternate on the same cameras (ABBA: each block's first
-// method alternates, so a drift in machine speed cancels), so every ratio compares frames timed
-// moments apart. One untimed frame per block (its first camera) is read back from each and scored.
+// Every camera of the path is drawn by the reference and the method in turn (ABBA: which goes
+// first alternates per frame, so a drift in machine speed cancels), so every ratio compares frames
+// timed moments apart. The frames are grouped in blocks; one untimed frame per block (its first
+// camera) is read back from each and scored.
 struct InterleavedTimes {
   FrameTimes reference, method;     // over all timed frames
-  std::vector<double> blockRatios;  // per block: reference median ms / method median ms
-  double speedupMedian = 0.0;       // median of blockRatios
-  double speedupQ25 = 0.0, speedupQ75 = 0.0;
+  std::vector<double> blockRatios;  // per block: median of its per-frame ratios
+  double speedupMedian = 0.0;       // median of the per-frame ratios (reference ms / method ms)
+  double speedupQ25 = 0.0, speedupQ75 = 0.0;  // their quartiles
   double psnr = 0.0;                 // mean over the blocks' scored frames: whole-frame PSNR,
   double flip = 0.0;                 // FLIP,
   double coverageError = 0.0;        // mean |Δα| over the frame

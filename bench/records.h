@@ -186,9 +186,9 @@ struct ForestRecord {
   double frameMsMedian = 0.0, frameMsP95 = 0.0, frameMsMean = 0.0, fps = 0.0;
   // Against the reference (null for capture trees, which have no mesh to time against):
   double polygonalFrameMsMedian = 0.0;
-  double speedupVsPolygonal = 0.0;                     // median of the per-block ratios
+  double speedupVsPolygonal = 0.0;                     // median of the per-frame ratios
   std::optional<std::array<double, 2>> speedupSpread;  // their [q25, q75]
-  std::optional<std::vector<double>> blockSpeedups;
+  std::optional<std::vector<double>> blockSpeedups;    // per block, the median of its frames
   double psnr = 0.0, flip = 0.0, coverageError = 0.0;  // forest frames vs the reference's
   double referenceCoverage = 0.0;                      // share of the frame the reference covers
   DrawnRecord drawn;

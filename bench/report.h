@@ -46,7 +46,7 @@ std::string formatSummaryMarkdown(const std::vector<SummaryRow>& rows, const std
 
 // The README's main table for the first tree of the rows: memory, bake, quality on the orbit
 // rings and the close-ups, what was drawn, and speed at the largest forest (median and IQR of
-// interleaved per-block ratios) with its forest-frame FLIP.
+// interleaved per-frame ratios) with its forest-frame FLIP.
 std::string formatMainTable(const std::vector<SummaryRow>& rows, const std::string& renderer);
 
 // A booktabs table for a paper: per tree and method, bake time, memory, PSNR by distance ring,
