@@ -89,6 +89,11 @@ std::string ParamDescriber::oneOf(const std::vector<std::string>& allowed) {
 
 namespace {
 
+// A user's value as a message shows it: at most 60 characters (a 30k-character name stays a line).
+std::string shortened(const std::string& text) {
+  return text.size() <= 60 ? text : text.substr(0, 57) + "...";
+}
+
 // Tracks nesting and the keys seen in every open object while the parser runs.
 class StrictJsonCallback {
  public:
@@ -121,10 +126,6 @@ class StrictJsonCallback {
   }
 
  private:
-  static std::string shortened(const std::string& text) {
-    return text.size() <= 60 ? text : text.substr(0, 57) + "...";
-  }
-
   const std::string& mSource;
   int mDepth = 0;
   std::vector<std::set<std::string>> mKeys;  // per open object or array (arrays stay empty)
@@ -151,7 +152,9 @@ nlohmann::json parseJson(const std::string& text, const std::string& source) {
 }
 
 nlohmann::json readJsonFile(const std::string& path) {
-  if (std::filesystem::is_directory(path)) throwInputError("{}: is a folder, not a file", path);
+  std::error_code ignored;  // a path too long to test is reported by the open below
+  if (std::filesystem::is_directory(path, ignored))
+    throwInputError("{}: is a folder, not a file", path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throwInputError("{}: cannot open file", path);
   std::stringstream buffer;
@@ -165,10 +168,9 @@ const std::string& checkPathComponent(const std::string& value, const std::strin
     return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-';
   });
   if (!allowed || value.empty() || value.size() > 100 || value == "." || value == "..") {
-    const std::string shown = value.size() <= 60 ? value : value.substr(0, 57) + "...";
     throwInputError(
         "{}: '{}' must be 1 to 100 letters, digits, '_', '.' or '-', and not '.' or '..'", what,
-        shown);
+        shortened(value));
   }
   return value;
 }
