@@ -24,11 +24,29 @@ struct AssetDescription {
   }
 };
 
+// The report without its timings (keys ending in "_s", at any depth): how long a bake took is a
+// fact of that process, not of the asset, and the same config must write byte-identical assets
+// (their size is the bake record's disk_bytes).
+nlohmann::json withoutTimings(const nlohmann::json& value) {
+  if (value.is_array()) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& item : value) out.push_back(withoutTimings(item));
+    return out;
+  }
+  if (!value.is_object()) return value;
+  nlohmann::json out = nlohmann::json::object();
+  for (const auto& [key, item] : value.items()) {
+    if (key.size() > 2 && key.ends_with("_s")) continue;
+    out[key] = withoutTimings(item);
+  }
+  return out;
+}
+
 }  // namespace
 
 void AssetFolder::describe(const std::string& method, const nlohmann::json& params,
                            const nlohmann::json& report) {
-  writeFields(AssetDescription{method, params, report});
+  writeFields(AssetDescription{method, params, withoutTimings(report)});
 }
 
 void AssetFolder::writeHeader() {

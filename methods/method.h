@@ -95,7 +95,8 @@ class AssetFolder {
   const std::filesystem::path& folder() const { return mFolder; }
   std::string headerPath() const { return (mFolder / "asset.json").string(); }
 
-  // Starts the header every asset has: the method, its effective parameters, its bake report.
+  // Starts the header every asset has: the method, its effective parameters, its bake report
+  // without timings (keys ending in "_s"), so one config always writes the same bytes.
   void describe(const std::string& method, const nlohmann::json& params,
                 const nlohmann::json& report);
   template <typename Fields>
