@@ -36,6 +36,7 @@ void runForests(RunContext& run, TreeSession& session, const VariantRun& v, Meth
     record.frames = times.method.frames;
     record.warmup = timing.warmup;
     record.blocks = static_cast<int>(times.blockRatios.size());
+    record.repeats = times.repeats;
     record.resolution = {timing.width, timing.height};
     record.frameMsMedian = times.method.medianMs;
     record.frameMsP95 = times.method.p95Ms;

@@ -182,6 +182,7 @@ struct ForestRecord {
   std::string tree, method, variant;
   nlohmann::json params;
   int trees = 0, frames = 0, warmup = 0, blocks = 0;
+  Absent<double> repeats;  // mean draws of a camera by each, the fastest timed (absent: 1)
   std::array<int, 2> resolution{0, 0};
   double frameMsMedian = 0.0, frameMsP95 = 0.0, frameMsMean = 0.0, fps = 0.0;
   // Against the reference (null for capture trees, which have no mesh to time against):
@@ -204,6 +205,7 @@ struct ForestRecord {
     v("frames", frames);
     v("warmup", warmup);
     v("blocks", blocks);
+    v("repeats", repeats);
     v("resolution", resolution);
     v("frame_ms_median", frameMsMedian);
     v("frame_ms_p95", frameMsP95);
