@@ -15,6 +15,7 @@
 #include "bench/results_store.h"
 #include "bench/run_meta.h"
 #include "bench/runner.h"
+#include "bench/slurm.h"
 #include "common/command_line.h"
 #include "common/error.h"
 #include "common/progress.h"
@@ -37,7 +38,7 @@ TreeSpec presetSpec(const std::string& preset, int64_t seed, int leaves) {
 
 // The main command: run a config.
 struct RunCommand {
-  std::string config, out, backend = "osmesa", shard = "0/1";
+  std::string config, out, backend = "osmesa", shard = "0/1", gpuReport;
   bool quiet = false, noImages = false, fresh = false, resumeOrFresh = false;
   bool listMethods = false, markdown = false;
 
@@ -45,7 +46,11 @@ struct RunCommand {
     app.add_option("--config", config, "experiment config (JSON)");
     app.add_option("--out", out, "output folder (default: results/<config name>)");
     app.add_option("--gl", backend, "OpenGL backend: osmesa | egl | glfw");
-    app.add_option("--shard", shard, "run slice I of N of the (tree × method) units, as I/N");
+    app.add_option("--shard", shard,
+                   "run shard I of N of the (tree × method) units (balanced by expected cost), "
+                   "as I/N");
+    app.add_option("--gpu-report", gpuReport,
+                   "a text file (e.g. nvidia-smi's output) to keep in meta.json");
     app.add_flag("--quiet", quiet, "no progress bars and no info logs");
     app.add_flag("--no-images", noImages, "do not write rendered views as PNG");
     app.add_flag("--fresh", fresh, "move an earlier run in the output folder aside and start anew");
@@ -67,6 +72,7 @@ struct RunCommand {
     options.outDirectory = out.empty() ? std::filesystem::path("results") / experiment.name
                                        : std::filesystem::path(out);
     options.saveImages = !noImages;
+    options.gpuReport = gpuReport;
     if (fresh && resumeOrFresh) throwInputError("--fresh and --resume-or-fresh exclude each other");
     options.resume = fresh           ? ResumePolicy::kFresh
                      : resumeOrFresh ? ResumePolicy::kResumeOrFresh
@@ -204,20 +210,65 @@ struct ReportCommand {
   }
 };
 
-// merge OUT RUN...: joins shard outputs.
+// merge OUT RUN... | merge OUT --plan PLAN: joins shard outputs.
 struct MergeCommand {
   CLI::App* app = nullptr;
-  std::string out;
+  std::string out, plan;
   std::vector<std::string> inputs;
 
   void add(CLI::App& parent) {
     app = parent.add_subcommand("merge", "join shard outputs into one run folder");
     app->add_option("out", out, "output folder")->required();
-    app->add_option("runs", inputs, "run folders to join")->required();
+    app->add_option("runs", inputs, "run folders to join");
+    app->add_option("--plan", plan,
+                    "plan.json of canopy-bench slurm: join its shards, each of which must be a "
+                    "finished run of its shard");
   }
 
   int run() const {
-    mergeRuns({inputs.begin(), inputs.end()}, out);
+    if (plan.empty() == inputs.empty())
+      throwInputError("merge: name the run folders to join, or --plan (not both)");
+    if (!plan.empty()) {
+      mergeRuns(completeShardFolders(plan), out);
+    } else {
+      mergeRuns({inputs.begin(), inputs.end()}, out);
+    }
+    return kExitOk;
+  }
+};
+
+// slurm: the experiment as a Slurm job array of shards and a merge job after it.
+struct SlurmCommand {
+  CLI::App* app = nullptr;
+  SlurmOptions options;
+  std::string config, out;
+
+  void add(CLI::App& parent) {
+    app = parent.add_subcommand(
+        "slurm", "write (and with --submit, submit) a Slurm job array of shards and a merge job");
+    app->add_option("--config", config, "experiment config (JSON)")->required();
+    app->add_option("--shards", options.shards, "array tasks, one shard of the plan each")
+        ->required();
+    app->add_option("--out", out, "run folder: plan, scripts, logs, shards/ and the merged run")
+        ->required();
+    app->add_option("--partition", options.partition,
+                    "sbatch --partition (default: the cluster's)");
+    app->add_option("--time", options.time, "wall-clock limit of each task (default 02:00:00)");
+    app->add_option("--cpus-per-task", options.cpusPerTask, "CPUs per task (default 2)");
+    app->add_option("--gpus-per-task", options.gpusPerTask,
+                    "GPUs per task (default 0; needs --gl egl)");
+    app->add_option("--gl", options.gl, "backend of the tasks: osmesa (default) or egl");
+    app->add_option("--account", options.account, "sbatch --account (default: the user's)");
+    app->add_flag("--submit", options.submit, "submit both jobs with sbatch and print their ids");
+  }
+
+  int run() {
+    options.config = config;
+    options.out = out;
+    std::error_code error;
+    options.benchExecutable = std::filesystem::read_symlink("/proc/self/exe", error);
+    if (error) throwInputError("slurm: cannot tell where canopy-bench is ({})", error.message());
+    runSlurmCommand(options);
     return kExitOk;
   }
 };
@@ -233,12 +284,14 @@ int main(int argc, char** argv) {
   ExportCapturesCommand exportCaptures;
   ReportCommand report;
   MergeCommand merge;
+  SlurmCommand slurm;
   RenderCommand render;
   run.add(app);
   exportTree.add(app);
   exportCaptures.add(app);
   report.add(app);
   merge.add(app);
+  slurm.add(app);
   render.add(app);
   if (const auto exitCode = parseCommandLine(app, "canopy-bench", argc, argv)) return *exitCode;
   return runWithExitCodes("canopy-bench", [&]() -> int {
@@ -251,6 +304,7 @@ int main(int argc, char** argv) {
     if (*exportCaptures.app) return exportCaptures.run(run.backend);
     if (*report.app) return report.run();
     if (*merge.app) return merge.run();
+    if (*slurm.app) return slurm.run();
     if (*render.app) return render.run(run.backend);
     return run.run();
   });

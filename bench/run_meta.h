@@ -27,6 +27,7 @@ struct RunMeta {
   };
   std::string experiment;
   Absent<std::string> configHash, codeVersion, finished;
+  Absent<std::string> shard;  // "I/N" of a shard run
   Gl gl;
   Absent<std::vector<nlohmann::json>> runs;  // earlier runs resumed into this folder
 
@@ -36,6 +37,7 @@ struct RunMeta {
     v("config_hash", configHash);
     v("code_version", codeVersion);
     v("finished", finished);
+    v("shard", shard);
     v("gl", gl);
     v("runs", runs);
   }

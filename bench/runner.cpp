@@ -2,6 +2,9 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
 #include <regex>
 
 #include <fmt/format.h>
@@ -10,8 +13,10 @@
 #include "bench/report.h"
 #include "bench/results_store.h"
 #include "bench/run_folder.h"
+#include "bench/shard_plan.h"
 #include "bench/stages.h"
 #include "common/atomic_file.h"
+#include "common/file_checks.h"
 #include "common/system_info.h"
 
 namespace canopy {
@@ -19,33 +24,57 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-nlohmann::json runMeta(const ExperimentConfig& config, const RunOptions& options,
-                       const gl::Context& context, Harness& harness) {
-  return {{"experiment", config.name},
-          {"config", config.raw},
-          {"config_hash", config.hash},
-          {"git_commit", gitCommit()},
-          {"code_version", codeVersion()},
-          {"canopy_version", CANOPY_VERSION},
-          {"gl",
-           {{"backend", gl::backendName(options.backend)},
-            {"renderer", context.renderer()},
-            {"version", context.version()},
-            {"vendor", context.vendor()}}},
-          {"draw_statistics", harness.statistics().source()},
-          {"cpu", cpuModel()},
-          {"seed", config.seed},
-          {"shard", fmt::format("{}/{}", options.shardIndex, options.shardCount)},
-          {"started", isoTimestampUtc()}};
+// Where a batch scheduler ran this process (Slurm's job, array task and node), or null.
+nlohmann::json schedulerInfo() {
+  const char* job = std::getenv("SLURM_JOB_ID");
+  if (job == nullptr) return nullptr;
+  nlohmann::json info = {{"scheduler", "slurm"}};
+  for (const char* name : {"SLURM_JOB_ID", "SLURM_ARRAY_JOB_ID", "SLURM_ARRAY_TASK_ID",
+                           "SLURMD_NODENAME", "SLURM_JOB_PARTITION", "SLURM_CPUS_PER_TASK"}) {
+    if (const char* value = std::getenv(name)) info[name] = value;
+  }
+  return info;
 }
 
-// The variants of tree `t` that this shard runs: units (tree × variant) u with u % N == I.
-std::vector<size_t> variantsOfShard(const ExperimentConfig& config, const RunOptions& options,
-                                    size_t t) {
+// The text of --gpu-report (what nvidia-smi said on the node; the Slurm script passes it only
+// when the node has nvidia-smi), at most 64 KiB.
+std::string readGpuReport(const std::filesystem::path& path) {
+  if (!regularFileExists(path)) throwInputError("--gpu-report: {}: no such file", path.string());
+  std::ifstream in(path);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return text.size() > 65536 ? text.substr(0, 65536) : text;
+}
+
+nlohmann::json runMeta(const ExperimentConfig& config, const RunOptions& options,
+                       const gl::Context& context, Harness& harness) {
+  return {
+      {"experiment", config.name},
+      {"config", config.raw},
+      {"config_hash", config.hash},
+      {"git_commit", gitCommit()},
+      {"code_version", codeVersion()},
+      {"canopy_version", CANOPY_VERSION},
+      {"gl",
+       {{"backend", gl::backendName(options.backend)},
+        {"renderer", context.renderer()},
+        {"version", context.version()},
+        {"vendor", context.vendor()}}},
+      {"draw_statistics", harness.statistics().source()},
+      {"cpu", cpuModel()},
+      {"seed", config.seed},
+      {"shard", fmt::format("{}/{}", options.shardIndex, options.shardCount)},
+      {"scheduler", schedulerInfo()},
+      {"gpu_report", options.gpuReport.empty() ? nlohmann::json(nullptr)
+                                               : nlohmann::json(readGpuReport(options.gpuReport))},
+      {"started", isoTimestampUtc()}};
+}
+
+// The variants of tree `t` that this shard runs (all of them without sharding).
+std::vector<size_t> variantsOfShard(const ExperimentConfig& config, const ShardPlan& plan,
+                                    int shard, size_t t) {
   std::vector<size_t> mine;
   for (size_t v = 0; v < config.variants.size(); ++v) {
-    if ((t * config.variants.size() + v) % size_t(options.shardCount) == size_t(options.shardIndex))
-      mine.push_back(v);
+    if (plan.runs(shard, t, v)) mine.push_back(v);
   }
   return mine;
 }
@@ -151,6 +180,8 @@ std::pair<int, int> parseShard(const std::string& text) {
 }
 
 void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
+  // Shards split the units by expected cost (the plan canopy-bench slurm writes too).
+  const ShardPlan plan = planShards(config, options.shardCount, "--shard");
   const RunFolder folder(options.outDirectory, {config.hash, codeVersion()}, options.resume);
   ResultsStore store(options.outDirectory);
   const auto metaPath = options.outDirectory / "meta.json";
@@ -166,7 +197,7 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
                gl::backendName(options.backend), options.outDirectory.string());
 
   for (size_t t = 0; t < config.trees.size(); ++t) {
-    const std::vector<size_t> mine = variantsOfShard(config, options, t);
+    const std::vector<size_t> mine = variantsOfShard(config, plan, options.shardIndex, t);
     if (mine.empty()) continue;
     TreeSession session = openTree(run, config.trees[t]);
     for (size_t v : mine) runVariant(run, session, config.variants[v]);

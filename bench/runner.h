@@ -12,10 +12,11 @@ namespace canopy {
 struct RunOptions {
   std::filesystem::path outDirectory;  // results/<name> unless --out
   gl::Backend backend = gl::Backend::kOsMesa;
-  int shardIndex = 0;  // --shard I/N: units u with u % N == I
+  int shardIndex = 0;  // --shard I/N: shard I of planShards(config, N), balanced by expected cost
   int shardCount = 1;
-  bool saveImages = true;  // rendered views as PNG under images/
-  bool saveAssets = true;  // baked assets under assets/ (their size is disk_bytes)
+  std::filesystem::path gpuReport;  // --gpu-report: a file (e.g. nvidia-smi's) kept in meta.json
+  bool saveImages = true;           // rendered views as PNG under images/
+  bool saveAssets = true;           // baked assets under assets/ (their size is disk_bytes)
   ResumePolicy resume = ResumePolicy::kResume;  // what to do with a folder that holds a run
   bool printTable = true;  // the main table of the first tree on stdout at the end
 };

@@ -87,12 +87,11 @@ std::string ParamDescriber::oneOf(const std::vector<std::string>& allowed) {
   return out;
 }
 
-namespace {
-
-// A user's value as a message shows it: at most 60 characters (a 30k-character name stays a line).
 std::string shortened(const std::string& text) {
   return text.size() <= 60 ? text : text.substr(0, 57) + "...";
 }
+
+namespace {
 
 // Tracks nesting and the keys seen in every open object while the parser runs.
 class StrictJsonCallback {

@@ -308,4 +308,7 @@ nlohmann::json writeParams(const Params& params) {
   return writer.json();
 }
 
+// A user's value as a message shows it: at most 60 characters (a 30k-character name stays a line).
+std::string shortened(const std::string& text);
+
 }  // namespace canopy

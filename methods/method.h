@@ -188,10 +188,19 @@ struct MemoryKnob {
   bool memoryGrows = true;  // memory grows with the value (false: it shrinks, e.g. a cell size)
 };
 
+// What a (tree × method) unit is expected to cost, for balancing shards (canopy-bench --shard,
+// slurm). Rough figures measured on the default run here (llvmpipe, 2 cores), at a tree of 20,000
+// leaves; only their proportions matter.
+struct CostHint {
+  double bakeSeconds = 0.1;  // one bake
+  double frameCost = 1.0;    // a frame's cost relative to the polygonal reference's
+};
+
 // What the runner needs to know about a method besides how to make it.
 struct MethodTraits {
   bool needsMesh = true;  // false: bakes from images alone, so it also runs on capture folders
   std::optional<MemoryKnob> memoryKnob;  // absent: the method has no resolution to turn
+  CostHint cost;
 };
 
 struct MethodInfo {

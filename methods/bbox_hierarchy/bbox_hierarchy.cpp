@@ -526,7 +526,8 @@ void registerBboxHierarchy(MethodRegistry& registry) {
   addMethod<BboxHierarchy, BboxParams>(
       registry, "bbox_hierarchy",
       "bounding-box hierarchy of six images per box (Lluch et al. 2004)",
-      {.memoryKnob = MemoryKnob{"texture_size", 8, 512, true, true}});
+      {.memoryKnob = MemoryKnob{"texture_size", 8, 512, true, true},
+       .cost = {.bakeSeconds = 1.8, .frameCost = 0.9}});
 }
 
 }  // namespace canopy

@@ -178,7 +178,8 @@ void registerBillboardCloud(MethodRegistry& registry) {
   addMethod<BillboardCloudMethod, BillboardCloudParams>(
       registry, "billboard_cloud",
       "classic billboard cloud: one orthographic leaf texture per billboard",
-      {.memoryKnob = MemoryKnob{"density", 2, 512, false, true}});
+      {.memoryKnob = MemoryKnob{"density", 2, 512, false, true},
+       .cost = {.bakeSeconds = 1.2, .frameCost = 0.7}});
 }
 
 }  // namespace canopy

@@ -572,7 +572,8 @@ void registerMultilayerIndirect(MethodRegistry& registry) {
   addMethod<MultilayerIndirect, MultilayerParams>(
       registry, "multilayer_indirect",
       "multi-layer indirect texturing (García et al. 2007): lists of leaf fragments per hash cell",
-      {.memoryKnob = MemoryKnob{"hash_resolution", 4, 256, true, true}});
+      {.memoryKnob = MemoryKnob{"hash_resolution", 4, 256, true, true},
+       .cost = {.bakeSeconds = 1.2, .frameCost = 1.0}});
 }
 
 }  // namespace canopy

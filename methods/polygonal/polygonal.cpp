@@ -208,7 +208,8 @@ class Polygonal final : public Method {
 
 void registerPolygonal(MethodRegistry& registry) {
   addMethod<Polygonal, PolygonalParams>(
-      registry, "polygonal", "the reference: wood mesh and every leaf quad with alpha test");
+      registry, "polygonal", "the reference: wood mesh and every leaf quad with alpha test",
+      {.cost = {.bakeSeconds = 0.0, .frameCost = 1.0}});
 }
 
 }  // namespace canopy

@@ -244,7 +244,8 @@ void registerSingleLeafIndirect(MethodRegistry& registry) {
   addMethod<SingleLeafIndirect, SingleLeafParams>(
       registry, "single_leaf_indirect",
       "one leaf image per billboard grid cell (García et al. 2005)",
-      {.memoryKnob = MemoryKnob{"cell_size", 0.25, 8, false, false}});
+      {.memoryKnob = MemoryKnob{"cell_size", 0.25, 8, false, false},
+       .cost = {.bakeSeconds = 0.6, .frameCost = 0.6}});
 }
 
 }  // namespace canopy

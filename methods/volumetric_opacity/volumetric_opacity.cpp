@@ -392,7 +392,9 @@ void registerVolumetricOpacity(MethodRegistry& registry) {
       registry, "volumetric_opacity",
       "volumetric opacity reconstruction with view-dependent billboards (Reche-Martinez, Martin, "
       "Drettakis 2004)",
-      {.needsMesh = false, .memoryKnob = MemoryKnob{"texels", 2, 8, true, true}});
+      {.needsMesh = false,
+       .memoryKnob = MemoryKnob{"texels", 2, 8, true, true},
+       .cost = {.bakeSeconds = 20.0, .frameCost = 6.0}});
 }
 
 }  // namespace canopy
