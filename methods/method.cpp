@@ -24,7 +24,8 @@ struct AssetDescription {
   }
 };
 
-// The report without its timings (keys ending in "_s", at any depth): how long a bake took is a
+// The report without its timings (keys "seconds" or ending in "_s", at any depth): how long a
+// bake took is a
 // fact of that process, not of the asset, and the same config must write byte-identical assets
 // (their size is the bake record's disk_bytes).
 nlohmann::json withoutTimings(const nlohmann::json& value) {
@@ -36,7 +37,7 @@ nlohmann::json withoutTimings(const nlohmann::json& value) {
   if (!value.is_object()) return value;
   nlohmann::json out = nlohmann::json::object();
   for (const auto& [key, item] : value.items()) {
-    if (key.size() > 2 && key.ends_with("_s")) continue;
+    if (key == "seconds" || (key.size() > 2 && key.ends_with("_s"))) continue;
     out[key] = withoutTimings(item);
   }
   return out;

@@ -96,7 +96,7 @@ class AssetFolder {
   std::string headerPath() const { return (mFolder / "asset.json").string(); }
 
   // Starts the header every asset has: the method, its effective parameters, its bake report
-  // without timings (keys ending in "_s"), so one config always writes the same bytes.
+  // without timings (keys "seconds" or ending in "_s"), so one config writes the same bytes.
   void describe(const std::string& method, const nlohmann::json& params,
                 const nlohmann::json& report);
   template <typename Fields>

@@ -4,7 +4,7 @@
 Usage: compare_records.py EXPECTED_RUN ACTUAL_RUN
 
 Every record must be present once in both, with equal fields, except the ones a second process
-measures differently by nature: wall-clock times (keys ending in _s, _seconds or holding _ms),
+measures differently by nature: wall-clock times (keys ending in _s or seconds, or holding _ms),
 frame rates and speedups, the repeats a timing needed, and peak memory of the process. Numbers
 that are rendered or computed (PSNR, FLIP, coverage, memory, primitives, ...) must be equal.
 Exit 0 when they match, 1 with one line per difference otherwise.
@@ -14,7 +14,7 @@ import re
 import sys
 
 MEASURED = re.compile(
-    r"(_s|_seconds|_ms|_ms_\w+)$|^(fps|speedup_vs_polygonal|speedup_spread|block_speedups|"
+    r"(_s|seconds|_ms|_ms_\w+)$|^(fps|speedup_vs_polygonal|speedup_spread|block_speedups|"
     r"repeats|bake_peak_rss_bytes)$"
 )
 
