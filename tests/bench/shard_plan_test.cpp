@@ -159,35 +159,26 @@ TEST(Slurm, MergeOfAPlanNamesTheShardThatIsMissingOrUnfinished) {
     }
   };
   expectRefusal("shard 0/3");
-  // Shards 0 and 2 finished, shard 1 started but never finished (its task was killed).
-  for (int s : {0, 1, 2}) {
+  // A shard folder holding a run of shard `held` ("I/N"), finished or not.
+  const auto writeRun = [&](int s, const std::string& held, bool finished) {
     const std::filesystem::path folder =
         plan.at("shards")[size_t(s)].at("folder").get<std::string>();
     nlohmann::json meta = {{"experiment", "small"},
                            {"config_hash", plan.at("config_hash")},
-                           {"shard", std::to_string(s) + "/3"},
+                           {"shard", held},
                            {"gl", {{"renderer", "test"}}}};
-    if (s != 1) meta["finished"] = "2026-12-01T00:00:00Z";
+    if (finished) meta["finished"] = "2026-12-01T00:00:00Z";
     test::writeText(folder / "meta.json", meta.dump());
     test::writeText(folder / "metrics.jsonl", "");
-  }
+  };
+  // Shards 0 and 2 finished, shard 1 started but never finished (its task was killed).
+  for (int s : {0, 1, 2}) writeRun(s, std::to_string(s) + "/3", s != 1);
   expectRefusal("shard 1/3");
   expectRefusal("sbatch --array=1 ");
   // A finished run of another shard count in its place is refused too.
-  const std::filesystem::path second = plan.at("shards")[1].at("folder").get<std::string>();
-  test::writeText(second / "meta.json", nlohmann::json({{"experiment", "small"},
-                                                        {"config_hash", plan.at("config_hash")},
-                                                        {"shard", "1/4"},
-                                                        {"finished", "2026-12-01T00:00:00Z"},
-                                                        {"gl", {{"renderer", "test"}}}})
-                                            .dump());
+  writeRun(1, "1/4", true);
   expectRefusal("holds shard 1/4");
-  test::writeText(second / "meta.json", nlohmann::json({{"experiment", "small"},
-                                                        {"config_hash", plan.at("config_hash")},
-                                                        {"shard", "1/3"},
-                                                        {"finished", "2026-12-01T00:00:00Z"},
-                                                        {"gl", {{"renderer", "test"}}}})
-                                            .dump());
+  writeRun(1, "1/3", true);
   EXPECT_EQ(completeShardFolders(files.plan).size(), 3u);
 }
 
