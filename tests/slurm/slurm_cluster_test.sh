@@ -40,14 +40,15 @@ fail() {
   exit 1
 }
 
-# Ports of our own, so a cluster already running on this machine is left alone.
+# Ports of our own, so a cluster already running on this machine is left alone; the loopback
+# address, so the test does not depend on how the host name resolves.
 base_port=$((20000 + ($$ % 10000) * 2))
 node=$(hostname -s)
 mkdir -p "$work/state" "$work/spool"
 export SLURM_CONF="$work/slurm.conf"
 cat >"$SLURM_CONF" <<EOF
 ClusterName=canopytest
-SlurmctldHost=$node
+SlurmctldHost=$node(127.0.0.1)
 SlurmctldPort=$base_port
 SlurmdPort=$((base_port + 1))
 AuthType=auth/munge
@@ -70,7 +71,7 @@ ReturnToService=2
 JobAcctGatherType=jobacct_gather/none
 AccountingStorageType=accounting_storage/none
 MinJobAge=600
-NodeName=$node CPUs=$(nproc) State=UNKNOWN
+NodeName=$node NodeAddr=127.0.0.1 CPUs=$(nproc) State=UNKNOWN
 PartitionName=canopy Nodes=ALL Default=YES MaxTime=INFINITE State=UP
 EOF
 
