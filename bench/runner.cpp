@@ -3,8 +3,6 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
-#include <iterator>
 #include <regex>
 
 #include <fmt/format.h>
@@ -16,6 +14,7 @@
 #include "bench/shard_plan.h"
 #include "bench/stages.h"
 #include "common/atomic_file.h"
+#include "common/config.h"
 #include "common/file_checks.h"
 #include "common/system_info.h"
 
@@ -40,8 +39,7 @@ nlohmann::json schedulerInfo() {
 // when the node has nvidia-smi), at most 64 KiB.
 std::string readGpuReport(const std::filesystem::path& path) {
   if (!regularFileExists(path)) throwInputError("--gpu-report: {}: no such file", path.string());
-  std::ifstream in(path);
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string text = readTextFile(path.string());
   return text.size() > 65536 ? text.substr(0, 65536) : text;
 }
 

@@ -150,7 +150,7 @@ nlohmann::json parseJson(const std::string& text, const std::string& source) {
   }
 }
 
-nlohmann::json readJsonFile(const std::string& path) {
+std::string readTextFile(const std::string& path) {
   std::error_code ignored;  // a path too long to test is reported by the open below
   if (std::filesystem::is_directory(path, ignored))
     throwInputError("{}: is a folder, not a file", path);
@@ -159,7 +159,11 @@ nlohmann::json readJsonFile(const std::string& path) {
   std::stringstream buffer;
   buffer << in.rdbuf();
   if (in.bad()) throwInputError("{}: cannot read file", path);
-  return parseJson(buffer.str(), path);
+  return buffer.str();
+}
+
+nlohmann::json readJsonFile(const std::string& path) {
+  return parseJson(readTextFile(path), path);
 }
 
 const std::string& checkPathComponent(const std::string& value, const std::string& what) {

@@ -92,6 +92,8 @@ class ConfigObject {
 inline constexpr int kMaxJsonDepth = 64;
 nlohmann::json parseJson(const std::string& text, const std::string& source);
 
+// The whole of a file; InputError naming it when it is a folder or cannot be opened or read.
+std::string readTextFile(const std::string& path);
 // Reads a JSON file through parseJson; InputError naming the file when it is missing, unreadable
 // or not valid JSON.
 nlohmann::json readJsonFile(const std::string& path);
