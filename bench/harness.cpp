@@ -242,19 +242,12 @@ double Harness::timeFrame(Method& method, const gl::RenderTarget& target, const 
   return millisecondsSince(start);
 }
 
-void Harness::scoreBlock(Method& reference, Method& method, const std::vector<Instance>& forest,
+void Harness::scoreBlock(Method& method, const std::vector<Instance>& forest,
                          const Aabb& treeBounds, const Camera& camera, int width, int height,
-                         int block, bool renderReference, ReferenceFrames& frames, int blocks,
+                         int block, const ReferenceFrames& frames, int blocks,
                          InterleavedTimes& result) {
-  // The block's scored frame: its first camera, untimed, read back from each (the reference's
-  // from the cache once it holds them).
-  if (renderReference) {
-    DrawnStats drawn;
-    frames.images.emplace_back(
-        renderForestFrame(reference, forest, treeBounds, camera, width, height, &drawn),
-        mSettings.flipPixelsPerDegree);
-    frames.drawn.push_back(drawn);
-  }
+  // The block's scored frame: its first camera, untimed, read back from the method and compared
+  // with the reference's.
   const FlipReference& scored = frames.images[size_t(block)];
   const ImageRgba8& expected = scored.image();
   const DrawnStats& referenceDrawn = frames.drawn[size_t(block)];
@@ -278,7 +271,36 @@ InterleavedTimes Harness::timeInterleaved(Method& reference, Method& method,
                                           const std::vector<Instance>& forest,
                                           const Aabb& treeBounds, const ForestTiming& timing,
                                           ReferenceFrames* cache) {
+  Method* const methods[] = {&method};
+  return std::move(timeInterleaved(reference, methods, forest, treeBounds, timing, cache)[0]);
+}
+
+namespace {
+
+// One camera of one method: its fastest draw and the reference's beside it, and how long their
+// draws took so far.
+struct CameraSample {
+  double ms[2] = {std::numeric_limits<double>::infinity(),
+                  std::numeric_limits<double>::infinity()};  // [0] reference, [1] method
+  double spent = 0.0;
+  int pairs = 0;
+
+  // A camera is drawn `repeats` times by each, more while the draws are too short to time above
+  // the scheduler's noise, fewer once they are long.
+  bool needsMore(const ForestTiming& timing) const {
+    const bool enough = pairs >= timing.repeats && spent >= timing.minSampleMs;
+    const bool tooLong = pairs >= 1 && spent >= timing.maxSampleMs;
+    return !enough && !tooLong && pairs < 8 * timing.repeats;
+  }
+};
+
+}  // namespace
+
+std::vector<InterleavedTimes> Harness::timeInterleaved(
+    Method& reference, std::span<Method* const> methods, const std::vector<Instance>& forest,
+    const Aabb& treeBounds, const ForestTiming& timing, ReferenceFrames* cache) {
   const int width = timing.width, height = timing.height;
+  const size_t count = methods.size();
   gl::RenderTarget& target = targetOfSize(width, height);
   uploadInstances(forest);
   const Aabb scene = forestBounds(forest, treeBounds);
@@ -289,62 +311,85 @@ InterleavedTimes Harness::timeInterleaved(Method& reference, Method& method,
   gl::api().Finish();
   for (int i = 0; i < timing.warmup; ++i) {
     timeFrame(reference, target, camera(i), width, height, scene);
-    timeFrame(method, target, camera(i), width, height, scene);
+    for (Method* method : methods) timeFrame(*method, target, camera(i), width, height, scene);
   }
-  InterleavedTimes result;
-  int draws = 0;
-  std::vector<double> referenceMs, methodMs;
-  const int blocks = std::clamp(timing.blocks, 1, std::max(timing.frames, 1));
-  ReferenceFrames local;
-  ReferenceFrames& frames = cache && cache->complete(blocks) ? *cache : local;
-  const bool renderReference = !(cache && cache->complete(blocks));
-  std::vector<double> frameRatios;
-  for (int block = 0; block < blocks; ++block) {
-    const int first = block * timing.frames / blocks, last = (block + 1) * timing.frames / blocks;
-    // Every camera is drawn by the reference and the method in turn, which going first
-    // alternating (ABBA), so a hiccup or a drift in machine speed touches one pair of frames.
-    std::vector<double> blockRatios;
-    for (int i = first; i < last; ++i) {
-      // A camera is drawn `repeats` times by each, more while the draws are too short to time
-      // above the scheduler's noise, fewer once they are long; the fastest draw is its time.
-      double ms[2] = {std::numeric_limits<double>::infinity(),
-                      std::numeric_limits<double>::infinity()};  // [0] reference, [1] method
-      double spent = 0.0;
-      for (int repeat = 0;; ++repeat) {
-        const bool enough = repeat >= timing.repeats && spent >= timing.minSampleMs;
-        const bool tooLong = repeat >= 1 && spent >= timing.maxSampleMs;
-        if (enough || tooLong || repeat >= 8 * timing.repeats) break;
+  // Passes over the whole path: in each, every camera is drawn by the reference and each method
+  // still short of samples in turn (ABBA: which goes first alternates, so a drift in machine
+  // speed cancels within a pair). A method's draws of one camera are thus spread over the whole
+  // timing of all methods, not taken back to back: this machine's speed changes in phases of
+  // seconds that slow some shaders more than others, and a ratio measured inside one phase
+  // carries it whole.
+  std::vector<std::vector<CameraSample>> samples(count,
+                                                 std::vector<CameraSample>(size_t(timing.frames)));
+  for (int pass = 0;; ++pass) {
+    bool drew = false;
+    for (int i = 0; i < timing.frames; ++i) {
+      for (size_t k = 0; k < count; ++k) {
+        const size_t m = (k + size_t(i) + size_t(pass)) % count;  // no method always follows one
+        CameraSample& sample = samples[m][size_t(i)];
+        if (!sample.needsMore(timing)) continue;
+        drew = true;
         for (int turn = 0; turn < 2; ++turn) {
-          const int which = (i + repeat) % 2 == 0 ? turn : 1 - turn;
-          const double t =
-              timeFrame(which == 0 ? reference : method, target, camera(i), width, height, scene);
-          ms[which] = std::min(ms[which], t);
-          spent += t;
+          const int which = (i + sample.pairs) % 2 == 0 ? turn : 1 - turn;
+          const double t = timeFrame(which == 0 ? reference : *methods[m], target, camera(i), width,
+                                     height, scene);
+          sample.ms[which] = std::min(sample.ms[which], t);
+          sample.spent += t;
         }
-        ++draws;
+        ++sample.pairs;
       }
-      referenceMs.push_back(ms[0]);
-      methodMs.push_back(ms[1]);
-      blockRatios.push_back(ms[0] / std::max(ms[1], 1e-9));
     }
-    frameRatios.insert(frameRatios.end(), blockRatios.begin(), blockRatios.end());
-    result.blockRatios.push_back(quantile(blockRatios, 0.5));
-    scoreBlock(reference, method, forest, treeBounds, camera(first), width, height, block,
-               renderReference, frames, blocks, result);
+    if (!drew) break;
   }
-  for (gl::DrawCounts* counts : {&result.drawn.counts, &result.referenceDrawn.counts}) {
-    counts->primitives /= uint64_t(blocks);  // sums over the blocks → means
-    counts->fragments /= uint64_t(blocks);
+  // The scored frames: each block's first camera, untimed (the reference's from the cache once
+  // it holds them; they are the same for every method).
+  const int blocks = std::clamp(timing.blocks, 1, std::max(timing.frames, 1));
+  const auto firstOf = [&](int block) { return block * timing.frames / blocks; };
+  ReferenceFrames local;
+  const bool renderReference = !(cache && cache->complete(blocks));
+  ReferenceFrames& frames = renderReference ? local : *cache;
+  if (renderReference) {
+    for (int block = 0; block < blocks; ++block) {
+      DrawnStats drawn;
+      frames.images.emplace_back(renderForestFrame(reference, forest, treeBounds,
+                                                   camera(firstOf(block)), width, height, &drawn),
+                                 mSettings.flipPixelsPerDegree);
+      frames.drawn.push_back(drawn);
+    }
+  }
+  std::vector<InterleavedTimes> results(count);
+  for (size_t m = 0; m < count; ++m) {
+    InterleavedTimes& result = results[m];
+    std::vector<double> referenceMs, methodMs, frameRatios;
+    int pairs = 0;
+    for (int block = 0; block < blocks; ++block) {
+      std::vector<double> blockRatios;
+      for (int i = firstOf(block); i < firstOf(block + 1); ++i) {
+        const CameraSample& sample = samples[m][size_t(i)];
+        referenceMs.push_back(sample.ms[0]);
+        methodMs.push_back(sample.ms[1]);
+        blockRatios.push_back(sample.ms[0] / std::max(sample.ms[1], 1e-9));
+        pairs += sample.pairs;
+      }
+      frameRatios.insert(frameRatios.end(), blockRatios.begin(), blockRatios.end());
+      result.blockRatios.push_back(quantile(blockRatios, 0.5));
+      scoreBlock(*methods[m], forest, treeBounds, camera(firstOf(block)), width, height, block,
+                 frames, blocks, result);
+    }
+    for (gl::DrawCounts* counts : {&result.drawn.counts, &result.referenceDrawn.counts}) {
+      counts->primitives /= uint64_t(blocks);  // sums over the blocks → means
+      counts->fragments /= uint64_t(blocks);
+    }
+    result.reference = summarizeFrameTimes(referenceMs);
+    result.method = summarizeFrameTimes(methodMs);
+    result.repeats = double(pairs) / double(std::max<size_t>(frameRatios.size(), 1));
+    result.speedupMedian = quantile(frameRatios, 0.5);
+    result.speedupQ25 = quantile(frameRatios, 0.25);
+    result.speedupQ75 = quantile(frameRatios, 0.75);
   }
   if (cache && renderReference) *cache = std::move(local);
   gl::checkError("Harness::timeInterleaved");
-  result.reference = summarizeFrameTimes(referenceMs);
-  result.method = summarizeFrameTimes(methodMs);
-  result.repeats = double(draws) / double(std::max<size_t>(frameRatios.size(), 1));
-  result.speedupMedian = quantile(frameRatios, 0.5);
-  result.speedupQ25 = quantile(frameRatios, 0.25);
-  result.speedupQ75 = quantile(frameRatios, 0.75);
-  return result;
+  return results;
 }
 
 ImageRgba8 Harness::renderForestFrame(Method& method, const std::vector<Instance>& forest,

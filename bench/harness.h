@@ -1,6 +1,7 @@
 #pragma once
 
 #include <memory>
+#include <span>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -100,9 +101,10 @@ struct ForestTiming {
 };
 
 // Every camera of the path is drawn by the reference and the method in turn (ABBA: which goes
-// first alternates per frame, so a drift in machine speed cancels), so every ratio compares frames
-// timed moments apart. The frames are grouped in blocks; one untimed frame per block (its first
-// camera) is read back from each and scored.
+// first alternates per pair, so a drift in machine speed cancels), so every ratio compares frames
+// timed moments apart; its repeats come in passes over the whole path, shared with every other
+// method timed on the same forest, so they are spread over minutes. The frames are grouped in
+// blocks; one untimed frame per block (its first camera) is read back from each and scored.
 struct InterleavedTimes {
   FrameTimes reference, method;     // over all timed frames
   std::vector<double> blockRatios;  // per block: median of its per-frame ratios
@@ -156,9 +158,15 @@ class Harness {
   ImageRgba8 display(const ImageRgbaF& linear) const;
   ImageRgba8 render(Method& method, const Camera& camera);  // display(renderLinear(...))
 
-  // Times `method` against `reference` on the same forest and cameras (InterleavedTimes), at
-  // timing.width × height without supersampling, glFinish after each frame. `cache`, when
-  // given, holds the reference's scored frames: filled on first use, reused after.
+  // Times each of `methods` against `reference` on the same forest and cameras
+  // (InterleavedTimes, one per method), all in one interleaved timing, at timing.width × height
+  // without supersampling, glFinish after each frame. `cache`, when given, holds the reference's
+  // scored frames: filled on first use, reused after.
+  std::vector<InterleavedTimes> timeInterleaved(Method& reference, std::span<Method* const> methods,
+                                                const std::vector<Instance>& forest,
+                                                const Aabb& treeBounds, const ForestTiming& timing,
+                                                ReferenceFrames* cache = nullptr);
+  // One method alone against the reference.
   InterleavedTimes timeInterleaved(Method& reference, Method& method,
                                    const std::vector<Instance>& forest, const Aabb& treeBounds,
                                    const ForestTiming& timing, ReferenceFrames* cache = nullptr);
@@ -184,12 +192,11 @@ class Harness {
   ImageRgbaF readTarget(const gl::RenderTarget& target) const;
   double timeFrame(Method& method, const gl::RenderTarget& target, const Camera& camera, int width,
                    int height, const Aabb& scene);
-  // Reads back and scores one block's frame of each (timeInterleaved), adding its share to the
-  // result's means.
-  void scoreBlock(Method& reference, Method& method, const std::vector<Instance>& forest,
-                  const Aabb& treeBounds, const Camera& camera, int width, int height, int block,
-                  bool renderReference, ReferenceFrames& frames, int blocks,
-                  InterleavedTimes& result);
+  // Reads back and scores the method's frame of one block (timeInterleaved) against the
+  // reference's, adding its share to the result's means.
+  void scoreBlock(Method& method, const std::vector<Instance>& forest, const Aabb& treeBounds,
+                  const Camera& camera, int width, int height, int block,
+                  const ReferenceFrames& frames, int blocks, InterleavedTimes& result);
 
   gl::Device& mDevice;
   RenderSettings mSettings;

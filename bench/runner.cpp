@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <deque>
 #include <regex>
 
 #include <fmt/format.h>
@@ -141,7 +142,17 @@ BakedMethod bakeVariant(RunContext& run, TreeSession& session, VariantRun& v, bo
   return baked;
 }
 
-void runVariant(RunContext& run, TreeSession& session, const MethodVariant& variant) {
+// A variant kept baked after its views and popping, until the tree's forests are timed.
+struct BakedVariant {
+  VariantRun run;
+  BakedMethod baked;
+  std::vector<int> forests;  // sizes still to time
+};
+
+// Bakes the variant, renders its views and popping paths; a variant with forests still to time
+// is kept in `kept` for the tree's forest timing.
+void runVariant(RunContext& run, TreeSession& session, const MethodVariant& variant,
+                std::deque<BakedVariant>& kept) {
   VariantRun v{variant, session.label(), session.label() + "|" + variant.label + "|",
                nlohmann::json::object()};
   if (!session.hasMesh() && builtinMethods().find(variant.method).traits.needsMesh) {
@@ -161,8 +172,19 @@ void runVariant(RunContext& run, TreeSession& session, const MethodVariant& vari
   }
   BakedMethod baked = bakeVariant(run, session, v, pending.bake);
   runViews(run, session, v, *baked.method, pending.views);
-  runForests(run, session, v, *baked.method, pending.forests);
   runPopping(run, session, v, *baked.method, pending.popping);
+  if (!pending.forests.empty()) kept.push_back({std::move(v), std::move(baked), pending.forests});
+}
+
+// Every variant of the shard on one tree: each baked, its views and popping done, then the
+// forests of all of them timed together, so each variant's timing is spread over the same
+// minutes as the others' (Harness::timeInterleaved).
+void runTree(RunContext& run, TreeSession& session, const std::vector<size_t>& variants) {
+  std::deque<BakedVariant> kept;
+  for (size_t v : variants) runVariant(run, session, run.config.variants[v], kept);
+  std::vector<ForestWork> work;
+  for (BakedVariant& k : kept) work.push_back({k.run, k.baked.method.get(), k.forests});
+  runForests(run, session, work);
 }
 
 }  // namespace
@@ -198,7 +220,7 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
     const std::vector<size_t> mine = variantsOfShard(config, plan, options.shardIndex, t);
     if (mine.empty()) continue;
     TreeSession session = openTree(run, config.trees[t]);
-    for (size_t v : mine) runVariant(run, session, config.variants[v]);
+    runTree(run, session, mine);
   }
   const auto rows = summarize(store.records());
   writeSummaries(options.outDirectory, store.records(), config.name, run.renderer);

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <span>
 #include <string>
 #include <vector>
 
@@ -62,10 +63,16 @@ BudgetRecord runBudget(RunContext& run, TreeSession& session, const VariantRun& 
 void runViews(RunContext& run, TreeSession& session, const VariantRun& v, Method& method,
               const std::vector<const EvalView*>& views);
 
-// Times every pending forest size interleaved with the reference and scores its frames, one
-// kind:"forest" record each.
-void runForests(RunContext& run, TreeSession& session, const VariantRun& v, Method& method,
-                const std::vector<int>& sizes);
+// A variant's forest sizes still to time, with its baked method.
+struct ForestWork {
+  const VariantRun& variant;
+  Method* method;
+  std::vector<int> sizes;
+};
+
+// Times every pending forest size interleaved with the reference, all the tree's variants due at
+// that size in one timing, and scores their frames: one kind:"forest" record per variant and size.
+void runForests(RunContext& run, TreeSession& session, std::span<const ForestWork> work);
 
 // The popping metric along each pending path, one kind:"popping" record each.
 void runPopping(RunContext& run, TreeSession& session, const VariantRun& v, Method& method,
