@@ -33,6 +33,7 @@ ForestRecord forestRecord(const RunContext& run, const VariantRun& v, int size,
   if (compared) {
     record.speedupSpread = std::array<double, 2>{times.speedupQ25, times.speedupQ75};
     record.blockSpeedups = times.blockRatios;
+    record.frameSpeedups = times.frameRatios;
   }
   record.psnr = compared ? times.psnr : nan;
   record.flip = compared ? times.flip : nan;

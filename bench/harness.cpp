@@ -360,7 +360,8 @@ std::vector<InterleavedTimes> Harness::timeInterleaved(
   std::vector<InterleavedTimes> results(count);
   for (size_t m = 0; m < count; ++m) {
     InterleavedTimes& result = results[m];
-    std::vector<double> referenceMs, methodMs, frameRatios;
+    std::vector<double> referenceMs, methodMs;
+    std::vector<double>& frameRatios = result.frameRatios;
     int pairs = 0;
     for (int block = 0; block < blocks; ++block) {
       std::vector<double> blockRatios;

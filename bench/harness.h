@@ -74,7 +74,7 @@ struct ForestTiming {
   int warmup = 10;
   int blocks = 5;
   // Defaults: one draw per camera (the protocol of the runs before repeats existed); the default
-  // config asks for 3 with the limits below, which made its speedups repeat within 10 %.
+  // config asks for 2 with the limits below (results/README.md: how repeatable that is).
   int repeats = 1;             // draws of each camera by each; the fastest counts
   double minSampleMs = 0.0;    // short frames: repeated more, until a camera's draws span this
   double maxSampleMs = 1.0e5;  // slow frames: no repeat starts after a camera's draws span this
@@ -108,6 +108,7 @@ struct ForestTiming {
 struct InterleavedTimes {
   FrameTimes reference, method;     // over all timed frames
   std::vector<double> blockRatios;  // per block: median of its per-frame ratios
+  std::vector<double> frameRatios;  // per camera of the path: reference ms / method ms
   double repeats = 1.0;             // mean draws of a camera by each (the fastest counts)
   double speedupMedian = 0.0;       // median of the per-frame ratios (reference ms / method ms)
   double speedupQ25 = 0.0, speedupQ75 = 0.0;  // their quartiles

@@ -190,6 +190,9 @@ struct ForestRecord {
   double speedupVsPolygonal = 0.0;                     // median of the per-frame ratios
   std::optional<std::array<double, 2>> speedupSpread;  // their [q25, q75]
   std::optional<std::vector<double>> blockSpeedups;    // per block, the median of its frames
+  // Per camera of the path, in order: reference ms / method ms (each the fastest draw), so any
+  // other statistic of the speedup can be computed from the record.
+  Absent<std::vector<double>> frameSpeedups;  // absent in runs made before it existed
   double psnr = 0.0, flip = 0.0, coverageError = 0.0;  // forest frames vs the reference's
   double referenceCoverage = 0.0;                      // share of the frame the reference covers
   DrawnRecord drawn;
@@ -215,6 +218,7 @@ struct ForestRecord {
     v("speedup_vs_polygonal", speedupVsPolygonal);
     v("speedup_spread", speedupSpread);
     v("block_speedups", blockSpeedups);
+    v("frame_speedups", frameSpeedups);
     v("psnr", psnr);
     v("flip", flip);
     v("coverage_error", coverageError);

@@ -52,6 +52,7 @@ TEST(Records, EveryKindRoundTripsThroughJson) {
   ForestRecord forest;
   forest.speedupSpread = std::array<double, 2>{1.0, 2.0};
   forest.blockSpeedups = std::vector<double>{1.0, 1.5, 2.0};
+  forest.frameSpeedups = std::vector<double>{0.9, 1.1, 1.5, 1.6, 2.0, 2.1};
   PoppingRecord popping;
   popping.distance = {1.5, 3.0};
   popping.lodSwitch = {false, true};

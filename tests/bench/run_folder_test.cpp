@@ -163,13 +163,14 @@ TEST_F(RunFolderCli, RecordsSayWhatWasDrawnAndHowItScored) {
     } else if (kind == "forest") {
       ++forests;
       for (const char* key : {"drawn", "speedup_spread", "psnr", "flip", "coverage_error",
-                              "block_speedups", "reference_coverage"})
+                              "block_speedups", "frame_speedups", "reference_coverage"})
         EXPECT_TRUE(record.contains(key)) << key;
       const auto& spread = record.at("speedup_spread");
       EXPECT_LE(spread[0].get<double>(), record.at("speedup_vs_polygonal").get<double>());
       EXPECT_GE(spread[1].get<double>(), record.at("speedup_vs_polygonal").get<double>());
       EXPECT_GT(record.at("reference_coverage").get<double>(), 0.0);
       EXPECT_EQ(record.at("block_speedups").size(), 2u);
+      EXPECT_EQ(record.at("frame_speedups").size(), record.at("frames").get<size_t>());
     }
   }
   EXPECT_EQ(closeups, 2 * 2);

@@ -229,6 +229,45 @@ TEST_P(MethodContract, DrawsForestsWithoutGlErrors) {
   EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
 }
 
+// Timing several methods at once (how the runner times a tree's variants) gives each the scores
+// and draw counts it gets alone, and every camera the repeats asked for: the shared passes only
+// change when the draws happen, never what is drawn or whose result is whose.
+TEST_P(MethodContract, TimedWithOtherMethodsScoresAsWhenTimedAlone) {
+  const Tree tree = test::smallTree();
+  auto method = bakeAndUpload(tree, "m");
+  auto reference = bakeAndUpload(tree, "reference", "polygonal");
+  auto other = bakeAndUpload(tree, "other", "polygonal");
+  mHarness->setTree(tree.bounds, tree.leaves.size());
+  const auto forest = layoutForest(4, tree.boundingSphereRadius(), 5);
+  ForestTiming timing;
+  timing.frames = 4;
+  timing.warmup = 0;
+  timing.blocks = 2;
+  timing.repeats = 2;
+  timing.width = timing.height = 64;
+  const InterleavedTimes alone =
+      mHarness->timeInterleaved(*reference, *method, forest, tree.bounds, timing);
+  Method* const both[] = {other.get(), method.get()};
+  const std::vector<InterleavedTimes> together =
+      mHarness->timeInterleaved(*reference, both, forest, tree.bounds, timing);
+  ASSERT_EQ(together.size(), 2u);
+  const InterleavedTimes& shared = together[1];
+  EXPECT_EQ(shared.psnr, alone.psnr);
+  EXPECT_EQ(shared.flip, alone.flip);
+  EXPECT_EQ(shared.coverageError, alone.coverageError);
+  EXPECT_EQ(shared.drawn.counts.primitives, alone.drawn.counts.primitives);
+  EXPECT_EQ(shared.drawn.counts.fragments, alone.drawn.counts.fragments);
+  EXPECT_EQ(shared.drawn.leafGeometryFraction, alone.drawn.leafGeometryFraction);
+  EXPECT_EQ(shared.blockRatios.size(), 2u);
+  EXPECT_EQ(shared.method.frames, 4);
+  EXPECT_DOUBLE_EQ(shared.repeats, 2.0);
+  EXPECT_DOUBLE_EQ(alone.repeats, 2.0);
+  // The other method's result is its own, not a copy of this one's.
+  if (GetParam() != "polygonal") {
+    EXPECT_NE(together[0].drawn.counts.primitives, shared.drawn.counts.primitives);
+  }
+}
+
 // The fair-harness rule: level of detail follows the output image, not the supersampled target,
 // so the same view at supersample 1 and 2 draws the same primitives (counted by GL queries) and
 // the same share of leaves as polygons; only the filtering differs. Views from near to far, so

@@ -15,6 +15,7 @@ import sys
 
 MEASURED = re.compile(
     r"(_s|seconds|_ms|_ms_\w+)$|^(fps|speedup_vs_polygonal|speedup_spread|block_speedups|"
+    r"frame_speedups|"
     r"repeats|bake_peak_rss_bytes)$"
 )
 
