@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/atomic_file.h"
+#include "common/capture_intrinsics.h"
 #include "common/config.h"
 #include "common/error.h"
 #include "common/file_checks.h"
@@ -199,28 +200,33 @@ glm::mat4 readCameraToWorld(const nlohmann::json& m, const std::string& where) {
   return cameraToWorld;
 }
 
-std::vector<CapturedView> readTransforms(const std::filesystem::path& folder,
-                                         const std::string& fileName, glm::ivec2& size) {
+// A frame as the transforms file gives it, before its image is brought to a centred camera.
+struct TransformsFrame {
+  glm::mat4 cameraToWorld;
+  PinholeIntrinsics intrinsics;
+  ImageRgbaF image;
+  std::string name;
+};
+
+std::vector<TransformsFrame> readTransforms(const std::filesystem::path& folder,
+                                            const std::string& fileName, glm::ivec2& size) {
   const std::filesystem::path path = folder / fileName;
   if (!pathExists(path))
     throwInputError("{}: missing (a NeRF capture folder needs it)", path.string());
   const nlohmann::json json = readJsonFile(path.string());
-  std::vector<CapturedView> views;
+  std::vector<TransformsFrame> frames;
   try {
-    const float angleX = json.at("camera_angle_x").get<float>();
-    if (!std::isfinite(angleX) || angleX <= 0.0f || angleX >= 3.1f)
-      throwInputError("{}: camera_angle_x = {} is not a field of view in radians", path.string(),
-                      angleX);
-    const auto& frames = json.at("frames");
-    if (!frames.is_array() || frames.empty())
+    const auto& list = json.at("frames");
+    if (!list.is_array() || list.empty())
       throwInputError("{}: \"frames\" must be a non-empty list", path.string());
-    for (size_t f = 0; f < frames.size(); ++f) {
-      const auto& frame = frames[f];
+    for (size_t f = 0; f < list.size(); ++f) {
+      const auto& frame = list[f];
+      const std::string where = fmt::format("{}: frames[{}]", path.string(), f);
       std::filesystem::path file = frame.at("file_path").get<std::string>();
       if (!file.has_extension()) file += ".png";
       const std::filesystem::path imagePath = (folder / file).lexically_normal();
-      const std::string where = fmt::format("{}: frames[{}].transform_matrix", path.string(), f);
-      const glm::mat4 cameraToWorld = readCameraToWorld(frame.at("transform_matrix"), where);
+      const glm::mat4 cameraToWorld =
+          readCameraToWorld(frame.at("transform_matrix"), where + ".transform_matrix");
       bool hasAlpha = false;
       const ImageRgba8 image = readImage(imagePath, &hasAlpha);
       if (!hasAlpha)
@@ -233,11 +239,27 @@ std::vector<CapturedView> readTransforms(const std::filesystem::path& folder,
         throwInputError("{}: {}×{}, but the capture's images are {}×{}", imagePath.string(),
                         image.width, image.height, size.x, size.y);
       }
-      views.push_back({cameraFromNerf(cameraToWorld, angleX, image.width, image.height),
-                       toLinearPremultiplied(image), imagePath.string()});
+      frames.push_back({cameraToWorld,
+                        readIntrinsics(json, frame, image.width, image.height, where),
+                        toLinearPremultiplied(image), imagePath.string()});
     }
   } catch (const nlohmann::json::exception& e) {
     throwInputError("{}: {}", path.string(), e.what());
+  }
+  return frames;
+}
+
+// The frames as views of one centred camera (commonCentredPinhole), their images resampled to it
+// where their own intrinsics differ.
+std::vector<CapturedView> centredViews(std::vector<TransformsFrame>& frames,
+                                       const CentredPinhole& camera) {
+  std::vector<CapturedView> views;
+  const float angleX = float(2.0 * std::atan(0.5 * double(camera.width) / camera.focal));
+  for (TransformsFrame& frame : frames) {
+    views.push_back({cameraFromNerf(frame.cameraToWorld, angleX, camera.width, camera.height),
+                     resampleToCentred(frame.image, frame.intrinsics, camera),
+                     std::move(frame.name)});
+    frame.image = {};
   }
   return views;
 }
@@ -290,8 +312,14 @@ CaptureSet readNerfCaptures(const std::filesystem::path& folder) {
   CaptureSet set;
   set.folder = folder;
   glm::ivec2 size(0);
-  set.train = readTransforms(folder, "transforms_train.json", size);
-  set.test = readTransforms(folder, "transforms_test.json", size);
+  std::vector<TransformsFrame> train = readTransforms(folder, "transforms_train.json", size);
+  std::vector<TransformsFrame> test = readTransforms(folder, "transforms_test.json", size);
+  std::vector<PinholeIntrinsics> intrinsics;
+  for (const auto* frames : {&train, &test})
+    for (const TransformsFrame& frame : *frames) intrinsics.push_back(frame.intrinsics);
+  const CentredPinhole camera = commonCentredPinhole(intrinsics);
+  set.train = centredViews(train, camera);
+  set.test = centredViews(test, camera);
   // Search where the cameras look, as far out as the nearest camera, then carve.
   const glm::vec3 focus = commonFocus(set.train);
   float reach = std::numeric_limits<float>::max();

@@ -82,8 +82,12 @@ bool viewCarvesBox(const PixelCamera& camera, const AlphaIntegral& mask, const A
 // Reads a folder in the NeRF synthetic layout: transforms_train.json and transforms_test.json,
 // each {"camera_angle_x": radians, "frames": [{"file_path": "./train/r_0", "transform_matrix":
 // 4×4 camera-to-world, camera looking down −Z}]}; images are RGBA PNGs (".png" is appended when
-// file_path has no extension). Throws InputError naming the file for malformed JSON, missing
-// keys, missing images or images whose size differs from the first one's.
+// file_path has no extension). The intrinsics nerfstudio and instant-ngp write (fl_x, fl_y, cx,
+// cy, w, h, at the top level or per frame; capture_intrinsics.h) are read too: frames whose
+// principal point is off centre or whose pixels are not square are resampled to one centred
+// square-pixel camera that holds every frame's view. Throws InputError naming the file for
+// malformed JSON, missing keys, bad intrinsics, missing images, images without alpha, images
+// whose size differs from the first one's, and matrices that are no camera pose.
 CaptureSet readNerfCaptures(const std::filesystem::path& folder);
 
 // The camera of a NeRF frame: `cameraToWorld` column-major (glm) as in transform_matrix,

@@ -1,12 +1,18 @@
-// The NeRF-layout capture reader: camera convention, round trip with the writer, and every bad
-// input naming its file.
+// The NeRF-layout capture reader: camera convention, round trip with the writer, intrinsics of
+// nerfstudio and instant-ngp, and every bad input naming its file.
+#include <functional>
+
 #include <gtest/gtest.h>
 
 #include <OpenImageIO/imageio.h>
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
+#include <nlohmann/json.hpp>
 
+#include "common/capture_intrinsics.h"
 #include "common/captures.h"
+#include "common/error.h"
+#include "common/image.h"
 #include "test_support.h"
 
 namespace canopy {
@@ -162,6 +168,160 @@ TEST(NerfCaptures, DuplicateKeysAreRejected) {
   test::writeText(dir / "transforms_test.json",
                   R"({"camera_angle_x": 0.7, "camera_angle_x": 0.2, "frames": []})");
   expectErrorNaming(dir.path(), "appears twice");
+}
+
+// Intrinsics as nerfstudio and instant-ngp write them: the frame's keys over the file's.
+TEST(NerfCaptures, IntrinsicsAreReadFromTheFrameOverTheFile) {
+  const nlohmann::json file = {{"fl_x", 100.0},
+                               {"fl_y", 110.0},
+                               {"cx", 30.0},
+                               {"cy", 20.0},
+                               {"w", 64},
+                               {"h", 48},
+                               {"camera_model", "OPENCV"},
+                               {"k1", 0.0},
+                               {"p1", 0.0}};
+  PinholeIntrinsics k = readIntrinsics(file, nlohmann::json::object(), 64, 48, "f");
+  EXPECT_EQ(k.focalX, 100.0);
+  EXPECT_EQ(k.focalY, 110.0);
+  EXPECT_EQ(k.centerX, 30.0);
+  EXPECT_EQ(k.centerY, 20.0);
+  EXPECT_FALSE(k.isCentredSquare());
+  k = readIntrinsics(file, {{"cx", 33.5}, {"fl_y", 90.0}}, 64, 48, "f");
+  EXPECT_EQ(k.centerX, 33.5);
+  EXPECT_EQ(k.focalY, 90.0);
+  EXPECT_EQ(k.centerY, 20.0);
+  // Only angles: the principal point at the centre, square pixels unless camera_angle_y differs.
+  k = readIntrinsics({{"camera_angle_x", glm::radians(90.0)}}, nlohmann::json::object(), 64, 48,
+                     "f");
+  EXPECT_NEAR(k.focalX, 32.0, 1e-9);
+  EXPECT_EQ(k.focalY, k.focalX);
+  EXPECT_TRUE(k.isCentredSquare());
+  k = readIntrinsics(
+      {{"camera_angle_x", glm::radians(90.0)}, {"camera_angle_y", glm::radians(90.0)}},
+      nlohmann::json::object(), 64, 48, "f");
+  EXPECT_NEAR(k.focalY, 24.0, 1e-9);
+}
+
+void expectIntrinsicsRejected(const nlohmann::json& file, const std::string& needle) {
+  try {
+    readIntrinsics(file, nlohmann::json::object(), 64, 48, "transforms_x.json: frames[2]");
+    ADD_FAILURE() << file.dump() << " accepted; expected an error naming " << needle;
+  } catch (const InputError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("transforms_x.json: frames[2]"), std::string::npos) << message;
+    EXPECT_NE(message.find(needle), std::string::npos) << message;
+  }
+}
+
+TEST(NerfCaptures, BadIntrinsicsAreErrorsNamingTheKey) {
+  expectIntrinsicsRejected(nlohmann::json::object(), "fl_x or camera_angle_x");
+  expectIntrinsicsRejected({{"fl_x", -5.0}}, "fl_x");
+  expectIntrinsicsRejected({{"fl_x", "50"}}, "fl_x");
+  expectIntrinsicsRejected({{"fl_x", 50.0}, {"fl_y", 0.0}}, "fl_y");
+  expectIntrinsicsRejected({{"camera_angle_x", 4.0}}, "camera_angle_x");
+  expectIntrinsicsRejected({{"fl_x", 50.0}, {"cx", 64.0}}, "cx");
+  expectIntrinsicsRejected({{"fl_x", 50.0}, {"cy", -1.0}}, "cy");
+  expectIntrinsicsRejected({{"fl_x", 50.0}, {"w", 640}}, "w = 640");
+  expectIntrinsicsRejected({{"fl_x", 50.0}, {"h", 480}}, "h = 480");
+  expectIntrinsicsRejected({{"fl_x", 50.0}, {"k1", 0.01}}, "k1");
+  expectIntrinsicsRejected({{"fl_x", 50.0}, {"p2", -0.002}}, "p2");
+  expectIntrinsicsRejected({{"fl_x", 50.0}, {"camera_model", "OPENCV_FISHEYE"}}, "camera_model");
+  expectIntrinsicsRejected({{"fl_x", 50.0}, {"fl_y", 5000.0}}, "fl_y");
+}
+
+// A capture folder written by writeNerfCaptures, then every image rewritten through `edit` and
+// its transforms files' camera_angle_x replaced by `intrinsics` (at the top level).
+void rewriteCapture(const std::filesystem::path& folder,
+                    const std::function<ImageRgba8(const ImageRgba8&)>& edit,
+                    const nlohmann::json& intrinsics) {
+  for (const char* split : {"train", "test"}) {
+    const auto path = folder / (std::string("transforms_") + split + ".json");
+    nlohmann::json json = nlohmann::json::parse(test::readText(path));
+    json.erase("camera_angle_x");
+    json.update(intrinsics);
+    for (const auto& frame : json.at("frames")) {
+      const auto image = folder / (frame.at("file_path").get<std::string>() + ".png");
+      writePng(image, edit(readImage(image)));
+    }
+    test::writeText(path, json.dump());
+  }
+}
+
+ImageRgba8 columns(const ImageRgba8& image, int from) {
+  ImageRgba8 out(image.width - from, image.height);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = from; x < image.width; ++x)
+      std::copy_n(&image.pixels[(size_t(y) * image.width + x) * 4], 4,
+                  &out.pixels[(size_t(y) * out.width + x - from) * 4]);
+  return out;
+}
+
+// Cropping an image moves its principal point: the cropped capture, read with its cx, gives the
+// original camera and, where the crop kept pixels, the original image exactly.
+TEST(NerfCaptures, AnOffCentrePrincipalPointIsResampledToTheCentredCamera) {
+  test::TempDir whole, cropped;
+  const auto train = ring(6, 48), test = ring(2, 48);
+  writeNerfCaptures(whole.path(), train, test);
+  writeNerfCaptures(cropped.path(), train, test);
+  const double focal = 24.0 / std::tan(0.5 * glm::radians(40.0));
+  rewriteCapture(
+      cropped.path(), [](const ImageRgba8& image) { return columns(image, 8); },
+      {{"fl_x", focal}, {"fl_y", focal}, {"cx", 16.0}, {"cy", 24.0}, {"w", 40}, {"h", 48}});
+  const CaptureSet a = readNerfCaptures(whole.path());
+  const CaptureSet b = readNerfCaptures(cropped.path());
+  ASSERT_EQ(b.train.size(), 6u);
+  for (size_t i = 0; i < a.train.size(); ++i) {
+    const ImageRgbaF& original = a.train[i].image;
+    const ImageRgbaF& resampled = b.train[i].image;
+    ASSERT_EQ(resampled.width, 48);
+    ASSERT_EQ(resampled.height, 48);
+    EXPECT_NEAR(b.train[i].camera.fovYDegrees, a.train[i].camera.fovYDegrees, 1e-3f);
+    for (int y = 0; y < 48; ++y) {
+      for (int x = 0; x < 48; ++x) {
+        for (int c = 0; c < 4; ++c) {
+          const float expected = x >= 8 ? original.at(x, y)[c] : 0.0f;
+          ASSERT_NEAR(resampled.at(x, y)[c], expected, 1e-6f) << x << "," << y;
+        }
+      }
+    }
+  }
+}
+
+// Pixels twice as wide as tall (every two columns averaged, fl_x halved): read back, the square's
+// coverage is where the original's is, up to the blur of the lost columns.
+TEST(NerfCaptures, NonSquarePixelsAreResampledToSquareOnes) {
+  test::TempDir whole, squeezed;
+  const auto train = ring(6, 48), test = ring(2, 48);
+  writeNerfCaptures(whole.path(), train, test);
+  writeNerfCaptures(squeezed.path(), train, test);
+  const double focal = 24.0 / std::tan(0.5 * glm::radians(40.0));
+  rewriteCapture(squeezed.path(),
+                 [](const ImageRgba8& image) {
+                   ImageRgba8 out(image.width / 2, image.height);
+                   for (size_t p = 0; p < out.pixels.size(); ++p) {
+                     const size_t x = p / 4 % size_t(out.width), y = p / 4 / size_t(out.width),
+                                  c = p % 4;
+                     const size_t left = (y * size_t(image.width) + 2 * x) * 4 + c;
+                     out.pixels[p] = uint8_t((image.pixels[left] + image.pixels[left + 4] + 1) / 2);
+                   }
+                   return out;
+                 },
+                 {{"fl_x", focal / 2}, {"fl_y", focal}, {"cx", 12.0}, {"cy", 24.0}});
+  const CaptureSet a = readNerfCaptures(whole.path());
+  const CaptureSet b = readNerfCaptures(squeezed.path());
+  for (size_t i = 0; i < a.train.size(); ++i) {
+    ASSERT_EQ(b.train[i].image.width, 48);
+    double difference = 0.0;
+    for (int y = 0; y < 48; ++y)
+      for (int x = 0; x < 48; ++x)
+        difference += std::abs(b.train[i].image.at(x, y)[3] - a.train[i].image.at(x, y)[3]);
+    // Each of the square's 16 rows has four pixels at its vertical edges that bilinear
+    // interpolation between a covered and an empty squeezed column leaves a quarter off.
+    EXPECT_LT(difference, 16 * 4 * 0.25 + 0.5) << i;
+    EXPECT_NEAR(b.train[i].image.at(24, 24)[3], 1.0f, 1e-6f);
+  }
+  EXPECT_TRUE(b.bounds.contains(glm::vec3(0.0f)));
 }
 
 }  // namespace
