@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <numeric>
 
@@ -294,24 +295,43 @@ struct CameraSample {
   }
 };
 
-}  // namespace
+// One method's times and ratios from its cameras' samples: per frame, per block of frames
+// [b · frames / blocks, (b + 1) · frames / blocks), and over the path.
+InterleavedTimes summarizeSamples(const std::vector<CameraSample>& samples, int blocks) {
+  InterleavedTimes result;
+  const int frames = int(samples.size());
+  std::vector<double> referenceMs, methodMs;
+  int pairs = 0;
+  for (int block = 0; block < blocks; ++block) {
+    std::vector<double> blockRatios;
+    for (int i = block * frames / blocks; i < (block + 1) * frames / blocks; ++i) {
+      const CameraSample& sample = samples[size_t(i)];
+      referenceMs.push_back(sample.ms[0]);
+      methodMs.push_back(sample.ms[1]);
+      blockRatios.push_back(sample.ms[0] / std::max(sample.ms[1], 1e-9));
+      pairs += sample.pairs;
+    }
+    result.frameRatios.insert(result.frameRatios.end(), blockRatios.begin(), blockRatios.end());
+    result.blockRatios.push_back(quantile(blockRatios, 0.5));
+  }
+  result.reference = summarizeFrameTimes(referenceMs);
+  result.method = summarizeFrameTimes(methodMs);
+  result.repeats = double(pairs) / double(std::max(frames, 1));
+  result.speedupMedian = quantile(result.frameRatios, 0.5);
+  result.speedupQ25 = quantile(result.frameRatios, 0.25);
+  result.speedupQ75 = quantile(result.frameRatios, 0.75);
+  return result;
+}
 
-std::vector<InterleavedTimes> Harness::timeInterleaved(
-    Method& reference, std::span<Method* const> methods, const std::vector<Instance>& forest,
-    const Aabb& treeBounds, const ForestTiming& timing, ReferenceFrames* cache) {
-  const int width = timing.width, height = timing.height;
+// The warm-up frames, then the timed passes over the path (timeInterleaved); `drawTimed` draws
+// camera i with a method and returns its time in milliseconds.
+std::vector<std::vector<CameraSample>> timePasses(
+    Method& reference, std::span<Method* const> methods, const ForestTiming& timing,
+    const std::function<double(Method&, int)>& drawTimed) {
   const size_t count = methods.size();
-  gl::RenderTarget& target = targetOfSize(width, height);
-  uploadInstances(forest);
-  const Aabb scene = forestBounds(forest, treeBounds);
-  const float fov = mSettings.fovYDegrees;
-  const auto camera = [&](int frame) {
-    return forestPathCamera(timing, forest, treeBounds, frame, fov);
-  };
-  gl::api().Finish();
   for (int i = 0; i < timing.warmup; ++i) {
-    timeFrame(reference, target, camera(i), width, height, scene);
-    for (Method* method : methods) timeFrame(*method, target, camera(i), width, height, scene);
+    drawTimed(reference, i);
+    for (Method* method : methods) drawTimed(*method, i);
   }
   // Passes over the whole path: in each, every camera is drawn by the reference and each method
   // still short of samples in turn (ABBA: which goes first alternates, so a drift in machine
@@ -331,8 +351,7 @@ std::vector<InterleavedTimes> Harness::timeInterleaved(
         drew = true;
         for (int turn = 0; turn < 2; ++turn) {
           const int which = (i + sample.pairs) % 2 == 0 ? turn : 1 - turn;
-          const double t = timeFrame(which == 0 ? reference : *methods[m], target, camera(i), width,
-                                     height, scene);
+          const double t = drawTimed(which == 0 ? reference : *methods[m], i);
           sample.ms[which] = std::min(sample.ms[which], t);
           sample.spent += t;
         }
@@ -341,6 +360,28 @@ std::vector<InterleavedTimes> Harness::timeInterleaved(
     }
     if (!drew) break;
   }
+  return samples;
+}
+
+}  // namespace
+
+std::vector<InterleavedTimes> Harness::timeInterleaved(
+    Method& reference, std::span<Method* const> methods, const std::vector<Instance>& forest,
+    const Aabb& treeBounds, const ForestTiming& timing, ReferenceFrames* cache) {
+  const int width = timing.width, height = timing.height;
+  const size_t count = methods.size();
+  gl::RenderTarget& target = targetOfSize(width, height);
+  uploadInstances(forest);
+  const Aabb scene = forestBounds(forest, treeBounds);
+  const float fov = mSettings.fovYDegrees;
+  const auto camera = [&](int frame) {
+    return forestPathCamera(timing, forest, treeBounds, frame, fov);
+  };
+  gl::api().Finish();
+  const std::vector<std::vector<CameraSample>> samples =
+      timePasses(reference, methods, timing, [&](Method& method, int frame) {
+        return timeFrame(method, target, camera(frame), width, height, scene);
+      });
   // The scored frames: each block's first camera, untimed (the reference's from the cache once
   // it holds them; they are the same for every method).
   const int blocks = std::clamp(timing.blocks, 1, std::max(timing.frames, 1));
@@ -357,23 +398,11 @@ std::vector<InterleavedTimes> Harness::timeInterleaved(
       frames.drawn.push_back(drawn);
     }
   }
-  std::vector<InterleavedTimes> results(count);
+  std::vector<InterleavedTimes> results;
+  results.reserve(count);
   for (size_t m = 0; m < count; ++m) {
-    InterleavedTimes& result = results[m];
-    std::vector<double> referenceMs, methodMs;
-    std::vector<double>& frameRatios = result.frameRatios;
-    int pairs = 0;
+    InterleavedTimes& result = results.emplace_back(summarizeSamples(samples[m], blocks));
     for (int block = 0; block < blocks; ++block) {
-      std::vector<double> blockRatios;
-      for (int i = firstOf(block); i < firstOf(block + 1); ++i) {
-        const CameraSample& sample = samples[m][size_t(i)];
-        referenceMs.push_back(sample.ms[0]);
-        methodMs.push_back(sample.ms[1]);
-        blockRatios.push_back(sample.ms[0] / std::max(sample.ms[1], 1e-9));
-        pairs += sample.pairs;
-      }
-      frameRatios.insert(frameRatios.end(), blockRatios.begin(), blockRatios.end());
-      result.blockRatios.push_back(quantile(blockRatios, 0.5));
       scoreBlock(*methods[m], forest, treeBounds, camera(firstOf(block)), width, height, block,
                  frames, blocks, result);
     }
@@ -381,12 +410,6 @@ std::vector<InterleavedTimes> Harness::timeInterleaved(
       counts->primitives /= uint64_t(blocks);  // sums over the blocks → means
       counts->fragments /= uint64_t(blocks);
     }
-    result.reference = summarizeFrameTimes(referenceMs);
-    result.method = summarizeFrameTimes(methodMs);
-    result.repeats = double(pairs) / double(std::max<size_t>(frameRatios.size(), 1));
-    result.speedupMedian = quantile(frameRatios, 0.5);
-    result.speedupQ25 = quantile(frameRatios, 0.25);
-    result.speedupQ75 = quantile(frameRatios, 0.75);
   }
   if (cache && renderReference) *cache = std::move(local);
   gl::checkError("Harness::timeInterleaved");

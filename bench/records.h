@@ -192,7 +192,7 @@ struct ForestRecord {
   std::optional<std::vector<double>> blockSpeedups;    // per block, the median of its frames
   // Per camera of the path, in order: reference ms / method ms (each the fastest draw), so any
   // other statistic of the speedup can be computed from the record.
-  Absent<std::vector<double>> frameSpeedups;  // absent in runs made before it existed
+  Absent<std::vector<double>> frameSpeedups;           // absent in runs made before it existed
   double psnr = 0.0, flip = 0.0, coverageError = 0.0;  // forest frames vs the reference's
   double referenceCoverage = 0.0;                      // share of the frame the reference covers
   DrawnRecord drawn;

@@ -183,6 +183,7 @@ void runTree(RunContext& run, TreeSession& session, const std::vector<size_t>& v
   std::deque<BakedVariant> kept;
   for (size_t v : variants) runVariant(run, session, run.config.variants[v], kept);
   std::vector<ForestWork> work;
+  work.reserve(kept.size());
   for (BakedVariant& k : kept) work.push_back({k.run, k.baked.method.get(), k.forests});
   runForests(run, session, work);
 }
