@@ -83,22 +83,21 @@ PinholeIntrinsics readIntrinsics(const nlohmann::json& file, const nlohmann::jso
           where, key, *value);
     }
   }
-  if (const auto fx = number(file, frame, "fl_x", where)) {
-    if (!(*fx > 0.0)) throwInputError("{}: fl_x = {} must be a focal length > 0", where, *fx);
-    k.focalX = *fx;
-  } else if (const auto angleX = number(file, frame, "camera_angle_x", where)) {
-    k.focalX = focalFromAngle(*angleX, width, "camera_angle_x", where);
-  } else {
+  const auto focal = [&](const char* focalKey, const char* angleKey, int pixels) {
+    std::optional<double> value = number(file, frame, focalKey, where);
+    if (value && !(*value > 0.0))
+      throwInputError("{}: {} = {} must be a focal length > 0", where, focalKey, *value);
+    if (!value) {
+      if (const auto angle = number(file, frame, angleKey, where))
+        value = focalFromAngle(*angle, pixels, angleKey, where);
+    }
+    return value;
+  };
+  const std::optional<double> focalX = focal("fl_x", "camera_angle_x", width);
+  if (!focalX)
     throwInputError("{}: needs fl_x or camera_angle_x (the horizontal focal length)", where);
-  }
-  if (const auto fy = number(file, frame, "fl_y", where)) {
-    if (!(*fy > 0.0)) throwInputError("{}: fl_y = {} must be a focal length > 0", where, *fy);
-    k.focalY = *fy;
-  } else if (const auto angleY = number(file, frame, "camera_angle_y", where)) {
-    k.focalY = focalFromAngle(*angleY, height, "camera_angle_y", where);
-  } else {
-    k.focalY = k.focalX;  // square pixels
-  }
+  k.focalX = *focalX;
+  k.focalY = focal("fl_y", "camera_angle_y", height).value_or(k.focalX);  // else square pixels
   if (k.focalX > 16.0 * k.focalY || k.focalY > 16.0 * k.focalX)
     throwInputError("{}: fl_x = {} and fl_y = {} are no camera's", where, k.focalX, k.focalY);
   k.centerX = 0.5 * double(width);

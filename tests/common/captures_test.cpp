@@ -257,19 +257,33 @@ ImageRgba8 columns(const ImageRgba8& image, int from) {
   return out;
 }
 
+// The same views written as a capture twice, the second rewritten (rewriteCapture), both read.
+struct CapturePair {
+  CaptureSet original, rewritten;
+};
+CapturePair readOriginalAndRewritten(const std::function<ImageRgba8(const ImageRgba8&)>& edit,
+                                     const nlohmann::json& intrinsics) {
+  test::TempDir whole, rewritten;
+  const auto train = ring(6, 48), test = ring(2, 48);
+  writeNerfCaptures(whole.path(), train, test);
+  writeNerfCaptures(rewritten.path(), train, test);
+  rewriteCapture(rewritten.path(), edit, intrinsics);
+  return {readNerfCaptures(whole.path()), readNerfCaptures(rewritten.path())};
+}
+
+// The focal length in pixels of ring()'s views (40° vertical field of view, 48 pixels).
+const double kRingFocal = 24.0 / std::tan(0.5 * glm::radians(40.0));
+
 // Cropping an image moves its principal point: the cropped capture, read with its cx, gives the
 // original camera and, where the crop kept pixels, the original image exactly.
 TEST(NerfCaptures, AnOffCentrePrincipalPointIsResampledToTheCentredCamera) {
-  test::TempDir whole, cropped;
-  const auto train = ring(6, 48), test = ring(2, 48);
-  writeNerfCaptures(whole.path(), train, test);
-  writeNerfCaptures(cropped.path(), train, test);
-  const double focal = 24.0 / std::tan(0.5 * glm::radians(40.0));
-  rewriteCapture(
-      cropped.path(), [](const ImageRgba8& image) { return columns(image, 8); },
-      {{"fl_x", focal}, {"fl_y", focal}, {"cx", 16.0}, {"cy", 24.0}, {"w", 40}, {"h", 48}});
-  const CaptureSet a = readNerfCaptures(whole.path());
-  const CaptureSet b = readNerfCaptures(cropped.path());
+  const auto [a, b] = readOriginalAndRewritten(
+      [](const ImageRgba8& image) { return columns(image, 8); }, {{"fl_x", kRingFocal},
+                                                                  {"fl_y", kRingFocal},
+                                                                  {"cx", 16.0},
+                                                                  {"cy", 24.0},
+                                                                  {"w", 40},
+                                                                  {"h", 48}});
   ASSERT_EQ(b.train.size(), 6u);
   for (size_t i = 0; i < a.train.size(); ++i) {
     const ImageRgbaF& original = a.train[i].image;
@@ -291,25 +305,17 @@ TEST(NerfCaptures, AnOffCentrePrincipalPointIsResampledToTheCentredCamera) {
 // Pixels twice as wide as tall (every two columns averaged, fl_x halved): read back, the square's
 // coverage is where the original's is, up to the blur of the lost columns.
 TEST(NerfCaptures, NonSquarePixelsAreResampledToSquareOnes) {
-  test::TempDir whole, squeezed;
-  const auto train = ring(6, 48), test = ring(2, 48);
-  writeNerfCaptures(whole.path(), train, test);
-  writeNerfCaptures(squeezed.path(), train, test);
-  const double focal = 24.0 / std::tan(0.5 * glm::radians(40.0));
-  rewriteCapture(squeezed.path(),
-                 [](const ImageRgba8& image) {
-                   ImageRgba8 out(image.width / 2, image.height);
-                   for (size_t p = 0; p < out.pixels.size(); ++p) {
-                     const size_t x = p / 4 % size_t(out.width), y = p / 4 / size_t(out.width),
-                                  c = p % 4;
-                     const size_t left = (y * size_t(image.width) + 2 * x) * 4 + c;
-                     out.pixels[p] = uint8_t((image.pixels[left] + image.pixels[left + 4] + 1) / 2);
-                   }
-                   return out;
-                 },
-                 {{"fl_x", focal / 2}, {"fl_y", focal}, {"cx", 12.0}, {"cy", 24.0}});
-  const CaptureSet a = readNerfCaptures(whole.path());
-  const CaptureSet b = readNerfCaptures(squeezed.path());
+  const auto squeeze = [](const ImageRgba8& image) {
+    ImageRgba8 out(image.width / 2, image.height);
+    for (size_t p = 0; p < out.pixels.size(); ++p) {
+      const size_t x = p / 4 % size_t(out.width), y = p / 4 / size_t(out.width), c = p % 4;
+      const size_t left = (y * size_t(image.width) + 2 * x) * 4 + c;
+      out.pixels[p] = uint8_t((image.pixels[left] + image.pixels[left + 4] + 1) / 2);
+    }
+    return out;
+  };
+  const auto [a, b] = readOriginalAndRewritten(
+      squeeze, {{"fl_x", kRingFocal / 2}, {"fl_y", kRingFocal}, {"cx", 12.0}, {"cy", 24.0}});
   for (size_t i = 0; i < a.train.size(); ++i) {
     ASSERT_EQ(b.train[i].image.width, 48);
     double difference = 0.0;

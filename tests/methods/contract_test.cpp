@@ -200,17 +200,24 @@ TEST_P(MethodContract, CorruptAssetHeadersAreInputErrors) {
   expectInputError(extra, "an unknown key");
 }
 
+// Four 64² frames in two blocks: enough to exercise every part of the forest timing.
+ForestTiming quickForestTiming(int warmup, int repeats) {
+  ForestTiming timing;
+  timing.frames = 4;
+  timing.warmup = warmup;
+  timing.blocks = 2;
+  timing.repeats = repeats;
+  timing.width = timing.height = 64;
+  return timing;
+}
+
 TEST_P(MethodContract, DrawsForestsWithoutGlErrors) {
   const Tree tree = test::smallTree();
   auto method = bakeAndUpload(tree, "m");
   auto reference = bakeAndUpload(tree, "reference", "polygonal");
   mHarness->setTree(tree.bounds, tree.leaves.size());
   const auto forest = layoutForest(9, tree.boundingSphereRadius(), 3);
-  ForestTiming timing;
-  timing.frames = 4;
-  timing.warmup = 1;
-  timing.blocks = 2;
-  timing.width = timing.height = 64;
+  const ForestTiming timing = quickForestTiming(1, 1);
   const InterleavedTimes times =
       mHarness->timeInterleaved(*reference, *method, forest, tree.bounds, timing);
   EXPECT_EQ(times.method.frames, 4);
@@ -239,12 +246,7 @@ TEST_P(MethodContract, TimedWithOtherMethodsScoresAsWhenTimedAlone) {
   auto other = bakeAndUpload(tree, "other", "polygonal");
   mHarness->setTree(tree.bounds, tree.leaves.size());
   const auto forest = layoutForest(4, tree.boundingSphereRadius(), 5);
-  ForestTiming timing;
-  timing.frames = 4;
-  timing.warmup = 0;
-  timing.blocks = 2;
-  timing.repeats = 2;
-  timing.width = timing.height = 64;
+  const ForestTiming timing = quickForestTiming(0, 2);
   const InterleavedTimes alone =
       mHarness->timeInterleaved(*reference, *method, forest, tree.bounds, timing);
   Method* const both[] = {other.get(), method.get()};
