@@ -29,7 +29,7 @@ ForestRecord forestRecord(const RunContext& run, const VariantRun& v, int size,
   record.frameMsMean = times.method.meanMs;
   record.fps = 1000.0 / times.method.medianMs;
   record.polygonalFrameMsMedian = compared ? times.reference.medianMs : nan;
-  record.speedupVsPolygonal = compared ? times.speedupMedian : nan;
+  record.speedupVsPolygonal = compared ? times.speedup : nan;
   if (compared) {
     record.speedupSpread = std::array<double, 2>{times.speedupQ25, times.speedupQ75};
     record.blockSpeedups = times.blockRatios;
@@ -97,8 +97,8 @@ void runForests(RunContext& run, TreeSession& session, std::span<const ForestWor
       if (reference) {
         spdlog::info(
             "{} on {}, {} trees: {:.1f} ms ({:.2f}× polygonal, IQR {:.2f}–{:.2f}), FLIP {:.3f}",
-            v.variant.label, session.label(), size, t.method.medianMs, t.speedupMedian,
-            t.speedupQ25, t.speedupQ75, t.flip);
+            v.variant.label, session.label(), size, t.method.medianMs, t.speedup, t.speedupQ25,
+            t.speedupQ75, t.flip);
       }
     }
     progress.advance();

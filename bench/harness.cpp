@@ -317,7 +317,9 @@ InterleavedTimes summarizeSamples(const std::vector<CameraSample>& samples, int 
   result.reference = summarizeFrameTimes(referenceMs);
   result.method = summarizeFrameTimes(methodMs);
   result.repeats = double(pairs) / double(std::max(frames, 1));
-  result.speedupMedian = quantile(result.frameRatios, 0.5);
+  double logSum = 0.0;
+  for (const double ratio : result.frameRatios) logSum += std::log(ratio);
+  result.speedup = std::exp(logSum / double(std::max<size_t>(result.frameRatios.size(), 1)));
   result.speedupQ25 = quantile(result.frameRatios, 0.25);
   result.speedupQ75 = quantile(result.frameRatios, 0.75);
   return result;

@@ -187,7 +187,7 @@ struct ForestRecord {
   double frameMsMedian = 0.0, frameMsP95 = 0.0, frameMsMean = 0.0, fps = 0.0;
   // Against the reference (null for capture trees, which have no mesh to time against):
   double polygonalFrameMsMedian = 0.0;
-  double speedupVsPolygonal = 0.0;                     // median of the per-frame ratios
+  double speedupVsPolygonal = 0.0;                     // geometric mean of the per-frame ratios
   std::optional<std::array<double, 2>> speedupSpread;  // their [q25, q75]
   std::optional<std::vector<double>> blockSpeedups;    // per block, the median of its frames
   // Per camera of the path, in order: reference ms / method ms (each the fastest draw), so any

@@ -487,9 +487,10 @@ std::string forestTables(const std::vector<SummaryRow>& rows) {
   if (forestSizes(rows).empty()) return "";
   std::string out = forestTable(
       rows,
-      "\n## Frame time by forest size\n\nMedian ms / FPS / speedup vs polygonal: the median "
-      "of per-block ratios with their interquartile range, blocks of reference and method "
-      "frames timed in turn on the same cameras in the same run.\n\n",
+      "\n## Frame time by forest size\n\nMedian ms / FPS / speedup vs polygonal: reference "
+      "and method timed in turn on each camera of the path in the same run; the speedup "
+      "summarizes the per-camera ratios (their geometric mean in runs after 1fe1cdd, their "
+      "median before: results/README.md) with their interquartile range.\n\n",
       [](const ForestRecord* f) {
         return f ? fmt::format(" {} / {} / {} |", number(f->frameMsMedian, 1), number(f->fps, 1),
                                speedupText(f))
@@ -582,8 +583,8 @@ std::string formatSummaryLatex(const std::vector<SummaryRow>& rows, const std::s
   out += "\\bottomrule\n\\end{tabular}\n";
   out += "\\caption{" + latexEscape(title) +
          ": PSNR in dB over the union of coverage masks, LDR-FLIP (mean over the frame), memory "
-         "from the GPU ledger, speedup = polygonal / method frame time (median of interleaved "
-         "blocks in the same run). Renderer: " +
+         "from the GPU ledger, speedup = polygonal / method frame time per camera, timed in turn "
+         "in the same run, summarized over the camera path. Renderer: " +
          latexEscape(renderer) + ".}\n\\end{table}\n";
   return out;
 }

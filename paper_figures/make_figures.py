@@ -387,8 +387,9 @@ def make_figures(run_dir: Path, out_root: Path):
                   out / "fps_vs_trees.png")
     made.append("- `fps_vs_trees.png`: FPS = 1000 / median frame time along the forest orbit, log-log.")
     plot_speedup_vs_trees(rows, trees, out / "speedup_vs_trees.png")
-    made.append("- `speedup_vs_trees.png`: speedup vs `polygonal` per forest size (median of per-block "
-                "ratios, blocks of both timed in turn on the same cameras); bars: interquartile range.")
+    made.append("- `speedup_vs_trees.png`: speedup vs `polygonal` per forest size (per-camera ratios, "
+                "both timed in turn on the same cameras, summarized as `speedup_vs_polygonal`); "
+                "bars: interquartile range of the per-camera ratios.")
 
     def closeup_marks(axis, row, colour):
         psnr = number(row.get("psnr_closeup"))
