@@ -34,11 +34,6 @@ double focalFromAngle(double angle, int pixels, const char* key, const std::stri
   return 0.5 * double(pixels) / std::tan(0.5 * angle);
 }
 
-bool sameCamera(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
-  return a.focalX == b.focalX && a.focalY == b.focalY && a.centerX == b.centerX &&
-         a.centerY == b.centerY && a.width == b.width && a.height == b.height;
-}
-
 }  // namespace
 
 bool PinholeIntrinsics::isCentredSquare() const {
@@ -117,7 +112,7 @@ PinholeIntrinsics readIntrinsics(const nlohmann::json& file, const nlohmann::jso
 CentredPinhole commonCentredPinhole(std::span<const PinholeIntrinsics> frames) {
   const PinholeIntrinsics& first = frames.front();
   if (first.isCentredSquare() &&
-      std::ranges::all_of(frames, [&](const PinholeIntrinsics& k) { return sameCamera(k, first); }))
+      std::ranges::all_of(frames, [&](const PinholeIntrinsics& k) { return k == first; }))
     return {first.focalX, first.width, first.height};
   CentredPinhole to;
   double halfX = 0.0, halfY = 0.0;  // tangents of the half fields of view
@@ -139,7 +134,7 @@ CentredPinhole commonCentredPinhole(std::span<const PinholeIntrinsics> frames) {
   return to;
 }
 
-ImageRgbaF resampleToCentred(const ImageRgbaF& image, const PinholeIntrinsics& from,
+ImageRgbaF resampleToCentred(ImageRgbaF image, const PinholeIntrinsics& from,
                              const CentredPinhole& to) {
   if (from.isCentredSquare() && from.focalX == to.focal && from.width == to.width &&
       from.height == to.height)

@@ -17,6 +17,7 @@ struct PinholeIntrinsics {
   int width = 0, height = 0;
   // Principal point at the image centre and square pixels: the camera a Canopy Camera is.
   bool isCentredSquare() const;
+  bool operator==(const PinholeIntrinsics&) const = default;
 };
 
 // The intrinsics of one frame of a transforms file for an image of width × height: the frame's
@@ -43,8 +44,8 @@ CentredPinhole commonCentredPinhole(std::span<const PinholeIntrinsics> frames);
 
 // `image`, taken with `from`, as the centred camera `to` with the same pose sees it: bilinear on
 // linear premultiplied values, transparent where `from` saw nothing (a capture shows the whole
-// object in every frame). A copy when `from` already is `to`.
-ImageRgbaF resampleToCentred(const ImageRgbaF& image, const PinholeIntrinsics& from,
+// object in every frame). The image itself, untouched, when `from` already is `to`.
+ImageRgbaF resampleToCentred(ImageRgbaF image, const PinholeIntrinsics& from,
                              const CentredPinhole& to);
 
 }  // namespace canopy

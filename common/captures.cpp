@@ -257,9 +257,8 @@ std::vector<CapturedView> centredViews(std::vector<TransformsFrame>& frames,
   const float angleX = float(2.0 * std::atan(0.5 * double(camera.width) / camera.focal));
   for (TransformsFrame& frame : frames) {
     views.push_back({cameraFromNerf(frame.cameraToWorld, angleX, camera.width, camera.height),
-                     resampleToCentred(frame.image, frame.intrinsics, camera),
+                     resampleToCentred(std::move(frame.image), frame.intrinsics, camera),
                      std::move(frame.name)});
-    frame.image = {};
   }
   return views;
 }
