@@ -254,6 +254,7 @@ std::vector<TransformsFrame> readTransforms(const std::filesystem::path& folder,
 std::vector<CapturedView> centredViews(std::vector<TransformsFrame>& frames,
                                        const CentredPinhole& camera) {
   std::vector<CapturedView> views;
+  views.reserve(frames.size());
   const float angleX = float(2.0 * std::atan(0.5 * double(camera.width) / camera.focal));
   for (TransformsFrame& frame : frames) {
     views.push_back({cameraFromNerf(frame.cameraToWorld, angleX, camera.width, camera.height),
