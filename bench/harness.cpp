@@ -165,6 +165,7 @@ void Harness::drawFrame(Method& method, const gl::RenderTarget& target, FrameCon
     drawn->counts = mStatistics->end();
     const double leaves = double(mTreeLeaves) * double(mUploadedInstances.size());
     drawn->leafGeometryFraction = leaves > 0 ? double(method.leafPolygonsDrawn()) / leaves : 0.0;
+    drawn->instancesPerLevel = method.instancesPerLevel();
   }
 }
 
@@ -264,6 +265,10 @@ void Harness::scoreBlock(Method& method, const std::vector<Instance>& forest,
   result.referenceCoverage += double(covered) / double(width * height) / blocks;
   result.drawn.counts += methodDrawn.counts;
   result.drawn.leafGeometryFraction += methodDrawn.leafGeometryFraction / blocks;
+  std::vector<uint64_t>& levels = result.drawn.instancesPerLevel;
+  levels.resize(std::max(levels.size(), methodDrawn.instancesPerLevel.size()), 0);
+  for (size_t l = 0; l < methodDrawn.instancesPerLevel.size(); ++l)
+    levels[l] += methodDrawn.instancesPerLevel[l];
   result.referenceDrawn.counts += referenceDrawn.counts;
   result.referenceDrawn.leafGeometryFraction += referenceDrawn.leafGeometryFraction / blocks;
 }

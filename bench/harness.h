@@ -65,6 +65,7 @@ struct DrawnStats {
   gl::DrawCounts counts;  // primitives and fragments of the whole frame (and shadows)
   double leafGeometryFraction =
       0.0;  // leaf polygons drawn / (leaves × instances); 0 without leaves
+  std::vector<uint64_t> instancesPerLevel;  // Method::instancesPerLevel, summed over frames
 };
 
 // A forest timed along a camera path against the reference, and scored against it: the config's

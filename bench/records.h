@@ -36,11 +36,15 @@ struct DrawnRecord {
   uint64_t primitives = 0;
   uint64_t fragments = 0;  // fragment-shader invocations (of the supersampled render for views)
   double leafGeometryFraction = 0.0;
+  // Instances drawn at each level of detail, finest first (forests: over the scored frames);
+  // absent for methods that do not report levels and in runs made before it existed.
+  Absent<std::vector<uint64_t>> instancesPerLevel;
   template <class V>
   void visit(V& v) {
     v("primitives", primitives);
     v("fragments", fragments);
     v("leaf_geometry_fraction", leafGeometryFraction);
+    v("instances_per_level", instancesPerLevel);
   }
 };
 

@@ -9,7 +9,10 @@
 namespace canopy {
 
 DrawnRecord drawnRecord(const DrawnStats& drawn) {
-  return {drawn.counts.primitives, drawn.counts.fragments, drawn.leafGeometryFraction};
+  DrawnRecord record{
+      drawn.counts.primitives, drawn.counts.fragments, drawn.leafGeometryFraction, {}};
+  if (!drawn.instancesPerLevel.empty()) record.instancesPerLevel = drawn.instancesPerLevel;
+  return record;
 }
 
 PendingWork pendingWork(const RunContext& run, const TreeSession& session, const VariantRun& v) {

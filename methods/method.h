@@ -169,6 +169,9 @@ class Method {
   // leaf for the reference, 0 for a pure impostor. Counted by the draw itself, so a method that
   // wins by drawing the reference's geometry shows it.
   virtual uint64_t leafPolygonsDrawn() const { return 0; }
+  // The instances the last draw() drew at each level of detail, finest first; empty for methods
+  // that do not report levels. Recorded in the records' "drawn" as "instances_per_level".
+  virtual std::vector<uint64_t> instancesPerLevel() const { return {}; }
   // The baked representation, so bake and render can run apart.
   virtual void save(AssetFolder& asset) const = 0;
   virtual void load(AssetFolder& asset) = 0;

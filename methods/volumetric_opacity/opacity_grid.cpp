@@ -4,6 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <stdexcept>
+#include <tuple>
 
 #include <glm/geometric.hpp>
 
@@ -117,6 +120,32 @@ OpacityGrid buildOpacityGrid(const Aabb& cube, int level, const std::vector<Opac
   return grid;
 }
 
+OpacityGrid coarsenGrid(const OpacityGrid& fine, float minTransparency) {
+  if (fine.level < 1) throw std::logic_error("coarsenGrid: the grid has no coarser level");
+  OpacityGrid coarse;
+  coarse.root = fine.root;
+  coarse.level = fine.level - 1;
+  coarse.side = fine.side / 3;
+  coarse.cellSize = fine.cellSize * 3.0f;
+  coarse.nonEmptyPerLevel = fine.nonEmptyPerLevel;
+  coarse.nonEmptyPerLevel.resize(
+      std::min(coarse.nonEmptyPerLevel.size(), size_t(coarse.level) + 1));
+  std::map<std::tuple<int, int, int>, double> depth;  // lattice order (z, y, x)
+  for (size_t i = 0; i < fine.cells.size(); ++i) {
+    const glm::ivec3 parent = fine.cells[i] / 3;
+    depth[{parent.z, parent.y, parent.x}] -= std::log(double(fine.transparency[i])) / 9.0;
+  }
+  coarse.cells.reserve(depth.size());
+  coarse.transparency.reserve(depth.size());
+  for (const auto& [zyx, opticalDepth] : depth) {
+    coarse.cells.emplace_back(std::get<2>(zyx), std::get<1>(zyx), std::get<0>(zyx));
+    coarse.transparency.push_back(
+        std::clamp(float(std::exp(-opticalDepth)), minTransparency, 1.0f - 1e-6f));
+  }
+  coarse.rebuildLattice();
+  return coarse;
+}
+
 bool traceRay(const OpacityGrid& grid, const PixelCamera& camera, float px, float py,
               std::vector<RaySegment>& out) {
   out.clear();
@@ -171,7 +200,7 @@ bool traceRay(const OpacityGrid& grid, const PixelCamera& camera, float px, floa
     const int32_t index = grid.cellAt(cell);
     if (index >= 0 && tNext > t) {
       const double w = scale * (double(tNext) * tNext * tNext - double(t) * t * t);
-      out.push_back({index, float(w)});
+      out.push_back({index, float(w), (tNext - t) / grid.cellSize});
     }
     t = tNext;
     cell[axis] += step[axis];

@@ -58,7 +58,14 @@ OpacityGrid buildOpacityGrid(const Aabb& cube, int level, const std::vector<Opac
 struct RaySegment {
   int32_t cell;
   float weight;
+  float length;  // of the ray inside the cell, in cell sizes
 };
+
+// The grid one level coarser (§7's recursive grid, read upwards): a parent holds its 27
+// children, and its optical depth −log t is the children's sum over the nine columns of three a
+// ray crosses on average (Σ −log t_child / 9), so a ray through a uniformly filled parent sees
+// the opacity the children gave it. Used for the levels of detail.
+OpacityGrid coarsenGrid(const OpacityGrid& fine, float minTransparency);
 
 // The non-empty cells the ray through pixel (px, py) (pixel centre at +0.5) crosses, front to
 // back, by a 3D-DDA walk of the lattice. Returns false when the ray misses the grid.

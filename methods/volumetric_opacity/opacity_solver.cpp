@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 namespace canopy {
 namespace {
@@ -85,7 +86,10 @@ SolverResult solveByProjection(OpacityGrid& grid, const std::vector<OpacityView>
   // Per block: δ_i and Σ w_i for every cell (double, so the block order fixes the sum exactly).
   std::vector<std::vector<double>> delta(RowBlocks::kBlocks), weight(RowBlocks::kBlocks);
   for (float& t : grid.transparency) t = std::clamp(t, settings.minTransparency, 1.0f);
-  for (int iteration = 0; iteration < settings.maxIterations; ++iteration) {
+  std::vector<float> best = grid.transparency;
+  double bestLog = std::numeric_limits<double>::infinity();
+  result.stopReason = "max_iterations";
+  for (int iteration = 0; iteration <= settings.maxIterations; ++iteration) {
     const auto iterationStart = Clock::now();
     std::vector<double> squared(RowBlocks::kBlocks, 0.0), squaredLog(RowBlocks::kBlocks, 0.0);
     std::vector<int> rays(RowBlocks::kBlocks, 0);
@@ -127,6 +131,20 @@ SolverResult solveByProjection(OpacityGrid& grid, const std::vector<OpacityView>
     log.rmsTransparency = rayCount ? std::sqrt(log.rmsTransparency / rayCount) : 0.0;
     log.rmsLog = rayCount ? std::sqrt(log.rmsLog / rayCount) : 0.0;
     result.rays = rayCount;
+    if (log.rmsLog <= bestLog) {
+      bestLog = log.rmsLog;
+      best = grid.transparency;
+      result.bestIteration = iteration;
+    } else {
+      result.stopReason = "residual_rose";
+      spdlog::info(
+          "volumetric_opacity: log residual of iterate {} ({:.4f}) above iterate {}'s "
+          "({:.4f}): keeping iterate {}",
+          iteration, log.rmsLog, result.bestIteration, bestLog, result.bestIteration);
+      break;
+    }
+    // The last pass only measured the final iterate.
+    if (iteration == settings.maxIterations) break;
     // End of the iteration: every cell moves by its normalised δ; above the cutoff it empties.
     for (size_t c = 0; c < cellCount; ++c) {
       if (grid.transparency[c] >= 1.0f) continue;
@@ -149,9 +167,13 @@ SolverResult solveByProjection(OpacityGrid& grid, const std::vector<OpacityView>
     result.iterations.push_back(log);
     if (log.maxChange < settings.convergence) {
       result.converged = true;
+      result.stopReason = "converged";
+      result.bestIteration = iteration + 1;  // the change was too small to measure again
+      best = grid.transparency;
       break;
     }
   }
+  grid.transparency = std::move(best);
   result.finalRmsTransparency = transparencyResidual(grid, views, settings.rayStride);
   result.seconds = secondsSince(start);
   return result;
@@ -248,6 +270,8 @@ SolverResult solveWithCeres(OpacityGrid& grid, const std::vector<OpacityView>& v
   ceres::Solver::Summary summary;
   if (result.rays > 0) ceres::Solve(options, &problem, &summary);
   result.converged = summary.termination_type == ceres::CONVERGENCE;
+  result.stopReason = "ceres: " + summary.message;
+  result.bestIteration = int(summary.iterations.size());
   for (size_t c = 0; c < values.size(); ++c) {
     float t = float(values[c]);
     if (t > settings.cutoff) t = 1.0f;

@@ -26,14 +26,21 @@ struct SolverIteration {
 struct SolverResult {
   std::string solver;
   std::vector<SolverIteration> iterations;
-  double finalRmsTransparency = 0.0;  // after the last update
+  double finalRmsTransparency = 0.0;  // of the transparencies kept (the best iterate)
   int rays = 0;
   bool converged = false;
+  // Why the iterations stopped: "converged" (no |Δt| above the threshold), "residual_rose" (the
+  // log residual of an iterate exceeded the best one's) or "max_iterations"; "ceres: …" for Ceres.
+  std::string stopReason;
+  int bestIteration = 0;  // the iterate kept: 0 the initialisation, k after the k-th update
   double seconds = 0.0;
 };
 
 // §5 and Fig. 5: for every pixel's ray, Q = (log t_i) is projected onto the plane Σ q = log t_p,
 // δ_i += w_i (t'_i − t_i); after each pass t_i += δ_i / Σ w_i, and t_i > cutoff becomes 1.
+// Each pass first measures the current iterate's log residual RMS(Σq − q_p); the iterate with
+// the smallest is kept, and the passes stop once an iterate is worse than the best (the update
+// averages the rays' projections, so it is not a descent step and can overshoot).
 // Parallel over fixed blocks of pixel rows, reduced in block order: the result does not depend
 // on the number of threads.
 SolverResult solveByProjection(OpacityGrid& grid, const std::vector<OpacityView>& views,

@@ -3,7 +3,6 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <numeric>
 
@@ -34,37 +33,31 @@ std::vector<int> selectTexels(const std::vector<uint16_t>& ages,
 
 namespace {
 
+// A finished texture of one view: M² texels of sRGB colour and linear alpha.
 struct Tile {
   int32_t cell;
-  std::vector<uint8_t> alpha, rgb;
+  std::vector<uint8_t> rgba;
+  bool hidden = false;  // every texel's contribution below the hidden cutoff (kPartition)
 };
 
-// One view's textures, in front-to-back cell order.
-std::vector<Tile> texturesOfView(const OpacityGrid& grid, const OpacityView& view,
-                                 const TextureSettings& settings) {
-  const PixelCamera& cam = view.camera;
-  const int width = cam.width(), height = cam.height(), m = settings.texels;
-  const ImageRgbaF& image = *view.image;
-  // The copy C_i of the pure-foreground colour (Eq. 3: premultiplied / α), 8-bit sRGB for
-  // OpenCV's inpainting.
-  cv::Mat copy(height, width, CV_8UC3);
-  std::vector<float> tCurr(size_t(width) * height);
-  for (int y = 0; y < height; ++y) {
-    for (int x = 0; x < width; ++x) {
-      const float* p = image.at(x, y);
-      const float a = p[3];
-      cv::Vec3b& out = copy.at<cv::Vec3b>(y, x);
-      for (int c = 0; c < 3; ++c)
-        out[c] = a > 1e-4f ? encodeSrgb8(std::clamp(p[c] / a, 0.0f, 1.0f)) : 0;
-      tCurr[size_t(y) * width + x] = 1.0f - a;
-    }
+// A cell's billboard in one view's pixel coordinates.
+struct Region {
+  int32_t cell;
+  glm::vec2 lo, size;  // billboard rectangle in pixel coordinates
+  int x0, y0, x1, y1;  // pixels whose centres it covers, [x0, x1) × [y0, y1)
+  float depth;         // of the cell's centre
+  // Pixel under texel (a, b) (rows from the billboard's top): the one holding its centre.
+  glm::ivec2 pixelOf(int a, int b, int m, int width, int height) const {
+    return {
+        std::clamp(int(std::floor(lo.x + (float(a) + 0.5f) / float(m) * size.x)), 0, width - 1),
+        std::clamp(int(std::floor(lo.y + (float(b) + 0.5f) / float(m) * size.y)), 0, height - 1)};
   }
+};
+
+// The billboards of the cells still holding opacity, front to back (ties by cell index).
+std::vector<Region> billboardRegions(const OpacityGrid& grid, const PixelCamera& cam) {
+  const int width = cam.width(), height = cam.height();
   const glm::vec2 half = billboardHalfExtents(grid.cellSize, cam.right(), cam.up());
-  struct Region {
-    int32_t cell;
-    glm::vec2 lo, size;  // billboard rectangle in pixel coordinates
-    int x0, y0, x1, y1;  // pixels whose centres it covers, [x0, x1) × [y0, y1)
-  };
   std::vector<Region> regions;
   for (size_t c = 0; c < grid.cells.size(); ++c) {
     if (grid.transparency[c] >= 1.0f) continue;
@@ -72,21 +65,168 @@ std::vector<Tile> texturesOfView(const OpacityGrid& grid, const OpacityView& vie
     const float z = cam.depth(center);
     if (z <= 1e-4f) continue;
     const glm::vec2 p = cam.project(center), h = half * cam.focalPixels() / z;
-    Region r{int32_t(c), p - h, 2.0f * h, 0, 0, 0, 0};
+    Region r{int32_t(c), p - h, 2.0f * h, 0, 0, 0, 0, z};
     r.x0 = std::max(0, int(std::ceil(p.x - h.x - 0.5f)));
     r.y0 = std::max(0, int(std::ceil(p.y - h.y - 0.5f)));
     r.x1 = std::min(width, int(std::floor(p.x + h.x - 0.5f)) + 1);
     r.y1 = std::min(height, int(std::floor(p.y + h.y - 0.5f)) + 1);
     regions.push_back(r);
   }
-  // Front to back (§6), ties by cell index.
-  std::vector<float> depth(regions.size());
-  for (size_t i = 0; i < regions.size(); ++i)
-    depth[i] = cam.depth(grid.cellCenter(regions[i].cell));
-  std::vector<size_t> order(regions.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](size_t a, size_t b) { return depth[a] < depth[b]; });
+  std::stable_sort(regions.begin(), regions.end(),
+                   [](const Region& a, const Region& b) { return a.depth < b.depth; });
+  return regions;
+}
+
+// The pure-foreground colour (Eq. 3: premultiplied / α) of a pixel, 8-bit sRGB.
+void pureColour(const ImageRgbaF& image, int x, int y, uint8_t* out) {
+  const float* p = image.at(x, y);
+  for (int c = 0; c < 3; ++c)
+    out[c] = p[3] > 1e-4f ? encodeSrgb8(std::clamp(p[c] / p[3], 0.0f, 1.0f)) : 0;
+}
+
+// Texels without alpha take the alpha-weighted mean colour of the others, so bilinear lookups
+// near a billboard's edge blend towards its own colour, not towards black.
+void fillTransparentTexels(std::vector<uint8_t>& rgba) {
+  double sum[3] = {0, 0, 0}, weight = 0.0;
+  for (size_t t = 0; t < rgba.size(); t += 4) {
+    for (int c = 0; c < 3; ++c) sum[c] += double(rgba[t + c]) * rgba[t + 3];
+    weight += rgba[t + 3];
+  }
+  if (weight <= 0.0) return;
+  for (size_t t = 0; t < rgba.size(); t += 4)
+    if (rgba[t + 3] == 0)
+      for (int c = 0; c < 3; ++c) rgba[t + c] = uint8_t(std::lround(sum[c] / weight));
+}
+
+// kPartition, one view. Per pixel, the cells its ray crosses and each one's share of α_p.
+struct PixelShares {
+  std::vector<uint32_t> start;  // pixels + 1 offsets into the entries
+  std::vector<int32_t> cell;
+  std::vector<float> alpha;    // a_c
+  std::vector<float> visible;  // a_c · Π_front (1 − a)
+  // Pixels with α_p but no cell on their ray: shared among the billboards covering them.
+  std::vector<float> fallbackExponent;  // per pixel: s with a_c = 1 − t_c^s, 0 when unused
+};
+
+PixelShares pixelShares(const OpacityGrid& grid, const OpacityView& view, float frontEmphasis) {
+  const PixelCamera& cam = view.camera;
+  const int width = cam.width(), height = cam.height();
+  PixelShares shares;
+  shares.start.assign(size_t(width) * height + 1, 0);
+  shares.fallbackExponent.assign(size_t(width) * height, 0.0f);
+  std::vector<RaySegment> segments;
+  std::vector<float> depths;
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const size_t pixel = size_t(y) * width + x;
+      shares.start[pixel] = uint32_t(shares.cell.size());
+      const float alpha = std::clamp(view.image->at(x, y)[3], 0.0f, 1.0f);
+      if (alpha < 1.0f / 512.0f) continue;
+      const float tp = std::max(1.0f - alpha, 1e-3f);
+      double total = 0.0;
+      if (traceRay(grid, cam, float(x) + 0.5f, float(y) + 0.5f, segments)) {
+        depths.clear();
+        double front = 0.0;
+        for (const RaySegment& s : segments) {
+          const double depth = -std::log(grid.transparency[s.cell]) * s.length;
+          depths.push_back(float(depth * std::exp(-frontEmphasis * front)));
+          front += depth;
+          total += depths.back();
+        }
+      }
+      if (total < 1e-9) {
+        shares.fallbackExponent[pixel] = -1.0f;  // marked; the exponent needs the billboards
+        continue;
+      }
+      const double scale = -std::log(double(tp)) / total;
+      double front = 1.0;
+      for (size_t i = 0; i < segments.size(); ++i) {
+        const float a = float(1.0 - std::exp(-scale * depths[i]));
+        shares.cell.push_back(segments[i].cell);
+        shares.alpha.push_back(a);
+        shares.visible.push_back(float(a * front));
+        front *= 1.0 - a;
+      }
+    }
+  }
+  shares.start.back() = uint32_t(shares.cell.size());
+  return shares;
+}
+
+// The fallback pixels' exponent: their α_p spread over every billboard covering them by each
+// cell's optical depth −log t_c (the rays missed the cells the hull kept for them).
+void fallbackExponents(const OpacityGrid& grid, const OpacityView& view,
+                       const std::vector<Region>& regions, PixelShares& shares) {
+  const int width = view.camera.width();
+  std::vector<double> depth(shares.fallbackExponent.size(), 0.0);
+  for (const Region& r : regions)
+    for (int y = r.y0; y < r.y1; ++y)
+      for (int x = r.x0; x < r.x1; ++x)
+        if (shares.fallbackExponent[size_t(y) * width + x] < 0.0f)
+          depth[size_t(y) * width + x] -= std::log(double(grid.transparency[r.cell]));
+  for (size_t p = 0; p < depth.size(); ++p) {
+    if (shares.fallbackExponent[p] >= 0.0f) continue;
+    const int x = int(p % size_t(width)), y = int(p / size_t(width));
+    const double tp = std::max(1.0 - double(view.image->at(x, y)[3]), 1e-3);
+    shares.fallbackExponent[p] = depth[p] > 0.0 ? float(std::log(tp) / -depth[p]) : 0.0f;
+  }
+}
+
+std::vector<Tile> partitionTextures(const OpacityGrid& grid, const OpacityView& view,
+                                    const TextureSettings& settings) {
+  const PixelCamera& cam = view.camera;
+  const int width = cam.width(), height = cam.height(), m = settings.texels;
+  const std::vector<Region> regions = billboardRegions(grid, cam);
+  PixelShares shares = pixelShares(grid, view, settings.frontEmphasis);
+  fallbackExponents(grid, view, regions, shares);
+  std::vector<Tile> tiles;
+  for (const Region& r : regions) {
+    Tile tile{r.cell, std::vector<uint8_t>(size_t(m) * m * 4, 0)};
+    float mostVisible = 0.0f;
+    const float tc = grid.transparency[r.cell];
+    for (int b = 0; b < m; ++b) {
+      for (int a = 0; a < m; ++a) {
+        const glm::ivec2 p = r.pixelOf(a, b, m, width, height);
+        const size_t pixel = size_t(p.y) * width + p.x;
+        float alpha = 0.0f, visible = 0.0f;
+        for (uint32_t e = shares.start[pixel]; e < shares.start[pixel + 1]; ++e) {
+          if (shares.cell[e] != r.cell) continue;
+          alpha = shares.alpha[e], visible = shares.visible[e];
+          break;
+        }
+        if (shares.fallbackExponent[pixel] > 0.0f)
+          visible = alpha = 1.0f - std::pow(tc, shares.fallbackExponent[pixel]);
+        uint8_t* texel = &tile.rgba[(size_t(b) * m + a) * 4];
+        texel[3] = uint8_t(std::lround(alpha * 255.0f));
+        if (texel[3] == 0) continue;
+        pureColour(*view.image, p.x, p.y, texel);
+        mostVisible = std::max(mostVisible, visible);
+      }
+    }
+    if (mostVisible <= 0.0f) continue;  // empty
+    tile.hidden = mostVisible < settings.hiddenCutoff;
+    fillTransparentTexels(tile.rgba);
+    tiles.push_back(std::move(tile));
+  }
+  return tiles;
+}
+
+// kPaper, one view, in front-to-back cell order.
+std::vector<Tile> paperTextures(const OpacityGrid& grid, const OpacityView& view,
+                                const TextureSettings& settings) {
+  const PixelCamera& cam = view.camera;
+  const int width = cam.width(), height = cam.height(), m = settings.texels;
+  const ImageRgbaF& image = *view.image;
+  // The copy C_i of the pure-foreground colour, 8-bit sRGB for OpenCV's inpainting.
+  cv::Mat copy(height, width, CV_8UC3);
+  std::vector<float> tCurr(size_t(width) * height);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      pureColour(image, x, y, copy.at<cv::Vec3b>(y, x).val);
+      tCurr[size_t(y) * width + x] = 1.0f - image.at(x, y)[3];
+    }
+  }
+  const std::vector<Region> regions = billboardRegions(grid, cam);  // front to back (§6)
   // N_curr: the billboards covering each pixel (the paper counts them with the stencil buffer).
   std::vector<uint16_t> nCurr(size_t(width) * height, 0), age(size_t(width) * height, 0);
   for (const Region& r : regions)
@@ -99,17 +239,12 @@ std::vector<Tile> texturesOfView(const OpacityGrid& grid, const OpacityView& vie
   std::vector<float> importance(static_cast<size_t>(texelCount));
   std::vector<int> texelPixel(static_cast<size_t>(texelCount));
   cv::Mat removed(height, width, CV_8U, cv::Scalar(0));
-  for (size_t k : order) {
-    const Region& r = regions[k];
+  for (const Region& r : regions) {
     const float tc = grid.transparency[r.cell];
-    // Resample the billboard's texels from the image (nearest pixel).
     for (int b = 0; b < m; ++b) {
       for (int a = 0; a < m; ++a) {
-        const int x = std::clamp(int(std::floor(r.lo.x + (float(a) + 0.5f) / float(m) * r.size.x)),
-                                 0, width - 1);
-        const int y = std::clamp(int(std::floor(r.lo.y + (float(b) + 0.5f) / float(m) * r.size.y)),
-                                 0, height - 1);
-        const size_t pixel = size_t(y) * width + x;
+        const glm::ivec2 p = r.pixelOf(a, b, m, width, height);
+        const size_t pixel = size_t(p.y) * width + p.x;
         const int t = b * m + a;
         texelPixel[t] = int(pixel);
         texelAge[t] = age[pixel];
@@ -119,17 +254,16 @@ std::vector<Tile> texturesOfView(const OpacityGrid& grid, const OpacityView& vie
       }
     }
     const std::vector<int> selected = selectTexels(texelAge, importance, tc);
-    Tile tile{r.cell, std::vector<uint8_t>(size_t(texelCount), 0),
-              std::vector<uint8_t>(size_t(texelCount) * 3, 0)};
+    Tile tile{r.cell, std::vector<uint8_t>(size_t(texelCount) * 4, 0)};
     bool any = false;
     for (int t : selected) {
       const int pixel = texelPixel[t];
       const int x = pixel % width, y = pixel / width;
-      const float alpha = image.at(x, y)[3];
-      tile.alpha[t] = uint8_t(std::lround(std::clamp(alpha, 0.0f, 1.0f) * 255.0f));
+      uint8_t* texel = &tile.rgba[size_t(t) * 4];
+      texel[3] = uint8_t(std::lround(std::clamp(image.at(x, y)[3], 0.0f, 1.0f) * 255.0f));
       const cv::Vec3b& colour = copy.at<cv::Vec3b>(y, x);
-      for (int c = 0; c < 3; ++c) tile.rgb[size_t(t) * 3 + c] = colour[c];
-      any = any || tile.alpha[t] > 0;
+      for (int c = 0; c < 3; ++c) texel[c] = colour[c];
+      any = any || texel[3] > 0;
     }
     // Update the pixels under selected texels (t_curr /= t_c, removed from the copy) once each.
     int rx0 = width, ry0 = height, rx1 = -1, ry1 = -1;
@@ -163,7 +297,9 @@ std::vector<Tile> texturesOfView(const OpacityGrid& grid, const OpacityView& vie
       }
       removed(roi).setTo(0);
     }
-    if (any) tiles.push_back(std::move(tile));
+    if (!any) continue;
+    fillTransparentTexels(tile.rgba);
+    tiles.push_back(std::move(tile));
   }
   return tiles;
 }
@@ -173,75 +309,67 @@ std::vector<Tile> texturesOfView(const OpacityGrid& grid, const OpacityView& vie
 ViewTextures generateViewTextures(const OpacityGrid& grid, const std::vector<OpacityView>& views,
                                   const TextureSettings& settings) {
   std::vector<std::vector<Tile>> perView(views.size());
-  tbb::parallel_for(size_t(0), views.size(),
-                    [&](size_t v) { perView[v] = texturesOfView(grid, views[v], settings); });
+  tbb::parallel_for(size_t(0), views.size(), [&](size_t v) {
+    perView[v] = settings.selection == TexelSelection::kPartition
+                     ? partitionTextures(grid, views[v], settings)
+                     : paperTextures(grid, views[v], settings);
+  });
   ViewTextures textures;
   textures.texels = settings.texels;
   textures.views = int(views.size());
   textures.cells = int(grid.cells.size());
   textures.tile.assign(size_t(textures.views) * textures.cells, kNoTile);
-  uint32_t next = 0;
+  // Tiles stored cell by cell, each cell's in view order: a cell's textures are contiguous, so
+  // the draw finds them from the cell's first tile and a mask of the views that have one.
+  std::vector<std::vector<std::pair<size_t, Tile*>>> ofCell(size_t(textures.cells));
+  size_t produced = 0;
   for (size_t v = 0; v < perView.size(); ++v) {
-    // Tiles stored in cell order within a view, so the layout does not depend on depth ties.
-    std::sort(perView[v].begin(), perView[v].end(),
-              [](const Tile& a, const Tile& b) { return a.cell < b.cell; });
+    produced += perView[v].size();
     for (Tile& tile : perView[v]) {
-      textures.tile[v * textures.cells + size_t(tile.cell)] = next++;
-      textures.alpha.insert(textures.alpha.end(), tile.alpha.begin(), tile.alpha.end());
-      textures.rgb.insert(textures.rgb.end(), tile.rgb.begin(), tile.rgb.end());
+      if (tile.hidden) {
+        ++textures.hiddenTiles;
+        continue;
+      }
+      ofCell[size_t(tile.cell)].emplace_back(v, &tile);
     }
   }
+  uint32_t next = 0;
+  for (size_t c = 0; c < ofCell.size(); ++c) {
+    for (const auto& [v, tile] : ofCell[c]) {  // views ascending: perView is walked in order
+      textures.tile[v * textures.cells + c] = next++;
+      textures.rgba.insert(textures.rgba.end(), tile->rgba.begin(), tile->rgba.end());
+    }
+  }
+  textures.emptyTiles = textures.tile.size() - produced;
   return textures;
 }
 
-PackedTextures packTextures(const ViewTextures& textures) {
-  PackedTextures packed;
-  packed.texels = textures.texels;
-  packed.tile = textures.tile;
-  packed.alpha = textures.alpha;
-  const size_t texelCount = size_t(textures.texels) * textures.texels;
-  const size_t tiles = textures.tileCount();
-  const auto maskOf = [&](size_t tile) {
-    std::vector<bool> mask(texelCount);
-    for (size_t t = 0; t < texelCount; ++t) mask[t] = textures.alpha[tile * texelCount + t] > 0;
-    return mask;
-  };
-  const auto disjoint = [](const std::vector<bool>& a, const std::vector<bool>& b) {
-    for (size_t t = 0; t < a.size(); ++t)
-      if (a[t] && b[t]) return false;
-    return true;
-  };
-  // Greedy, deterministic: a texture joins one of the most recent half-filled slots whose
-  // alpha it does not intersect, or opens a slot.
-  constexpr size_t kWindow = 64;
-  struct OpenSlot {
-    uint32_t slot;
-    std::vector<bool> mask;
-  };
-  std::vector<OpenSlot> open;
-  packed.slotOfTile.assign(tiles, 0);
-  for (size_t tile = 0; tile < tiles; ++tile) {
-    std::vector<bool> mask = maskOf(tile);
-    const uint8_t* rgb = &textures.rgb[tile * texelCount * 3];
-    bool placed = false;
-    for (size_t k = open.size(); k-- > 0 && open.size() - k <= kWindow;) {
-      if (!disjoint(open[k].mask, mask)) continue;
-      const uint32_t slot = open[k].slot;
-      packed.slotOfTile[tile] = slot;
-      uint8_t* destination = &packed.slotRgb[slot * texelCount * 3];
-      for (size_t t = 0; t < texelCount; ++t)
-        if (mask[t]) std::copy_n(rgb + t * 3, 3, destination + t * 3);
-      open.erase(open.begin() + std::ptrdiff_t(k));
-      placed = true;
-      break;
-    }
-    if (placed) continue;
-    const auto slot = uint32_t(packed.slotRgb.size() / (texelCount * 3));
-    packed.slotOfTile[tile] = slot;
-    packed.slotRgb.insert(packed.slotRgb.end(), rgb, rgb + texelCount * 3);
-    open.push_back({slot, std::move(mask)});
+TileAtlas layOutTiles(const std::vector<uint8_t>& rgba, int texels, int maxPageSize) {
+  TileAtlas atlas;
+  atlas.texels = texels;
+  const size_t tileBytes = size_t(texels) * texels * 4;
+  const size_t tiles = rgba.size() / tileBytes;
+  // Page side a multiple of both M and the 4×4 blocks of S3TC.
+  const int unit = std::lcm(texels, 4);
+  const int largest = std::max(unit, maxPageSize / unit * unit);
+  int pageSize = unit;
+  while (pageSize < largest && size_t(pageSize / texels) * size_t(pageSize / texels) < tiles)
+    pageSize = std::min(largest, pageSize * 2);
+  atlas.pageSize = pageSize;
+  atlas.tilesPerRow = pageSize / texels;
+  const size_t perPage = size_t(atlas.tilesPerPage());
+  const size_t pages = std::max<size_t>(1, (tiles + perPage - 1) / perPage);
+  atlas.pages.assign(pages, ImageRgba8(pageSize, pageSize));
+  for (size_t i = 0; i < tiles; ++i) {
+    ImageRgba8& page = atlas.pages[i / perPage];
+    const size_t slot = i % perPage;
+    const int x0 = int(slot % size_t(atlas.tilesPerRow)) * texels;
+    const int y0 = int(slot / size_t(atlas.tilesPerRow)) * texels;
+    for (int b = 0; b < texels; ++b)
+      std::copy_n(&rgba[i * tileBytes + size_t(b) * texels * 4], size_t(texels) * 4,
+                  page.at(x0, y0 + b));
   }
-  return packed;
+  return atlas;
 }
 
 }  // namespace canopy

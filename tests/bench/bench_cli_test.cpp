@@ -403,6 +403,10 @@ TEST(BenchCli, CaptureFolderTreesAreScoredOnTheirHeldOutViews) {
       // Scored against the photograph it never saw: recognisably the tree, far from exact.
       EXPECT_GT(record.at("psnr").get<double>(), 12.0);
       EXPECT_LT(record.at("psnr").get<double>(), 60.0);
+      // The level of detail the view was drawn at is recorded: grid levels 3 and 2 exist.
+      const auto& levels = record.at("drawn").at("instances_per_level");
+      ASSERT_EQ(levels.size(), 2u);
+      EXPECT_EQ(levels[0].get<uint64_t>() + levels[1].get<uint64_t>(), 1u) << "one tree";
     } else if (kind == "forest") {
       ++forests;
       EXPECT_TRUE(record.at("speedup_vs_polygonal").is_null()) << "no reference to time";

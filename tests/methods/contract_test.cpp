@@ -65,9 +65,12 @@ class MethodContract : public testing::TestWithParam<std::string> {
     return orbitCamera(tree.bounds, {3.0f, elevation, 30.0f}, 40.0f);
   }
 
+  // Pixels with visible coverage: alpha of at least 8/255, so the faint fringe a blended,
+  // bilinearly filtered impostor leaves around thin branches (volumetric_opacity) is not counted
+  // as drawing outside the tree; alpha-tested methods are unaffected.
   static long coveredPixels(const ImageRgba8& image) {
     long covered = 0;
-    for (size_t i = 3; i < image.pixels.size(); i += 4) covered += image.pixels[i] > 0;
+    for (size_t i = 3; i < image.pixels.size(); i += 4) covered += image.pixels[i] >= 8;
     return covered;
   }
 

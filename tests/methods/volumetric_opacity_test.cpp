@@ -3,12 +3,16 @@
 // weights against brute-force sampling, texel selection and packing of §6.
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <numeric>
 #include <set>
+#include <tuple>
 
 #include "common/random.h"
 #include "methods/volumetric_opacity/opacity_grid.h"
 #include "methods/volumetric_opacity/opacity_solver.h"
 #include "methods/volumetric_opacity/view_textures.h"
+#include "methods/volumetric_opacity/volumetric_levels.h"
 #include "test_support.h"
 
 namespace canopy {
@@ -188,13 +192,16 @@ TEST(VolumetricTextures, SelectionKeepsTheFloorOfAlphaTimesTexelsOldestFirst) {
   EXPECT_EQ(selectTexels(ages, importance, 0.0f).size(), 64u);
 }
 
-TEST(VolumetricTextures, EveryBillboardHoldsAtMostItsShareOfTexels) {
+TEST(VolumetricTextures, PaperSelectionHoldsAtMostEachCellsShareOfTexels) {
   const std::vector<glm::ivec3> cells = {{0, 1, 1}, {1, 1, 1}, {2, 1, 1}, {1, 2, 1}};
   const OpacityGrid truth = gridWith(1, cells, {0.5f, 0.3f, 0.8f, 0.6f});
   std::vector<CapturedView> captured = {syntheticView(truth, lookingAt({9, 1, 2}), 64),
                                         syntheticView(truth, lookingAt({1, 2, 9}), 64)};
   const auto views = prepareViews(captured, 0.02f);
-  const ViewTextures textures = generateViewTextures(truth, views, {4, true, 2});
+  TextureSettings settings;
+  settings.texels = 4;
+  settings.selection = TexelSelection::kPaper;
+  const ViewTextures textures = generateViewTextures(truth, views, settings);
   ASSERT_EQ(textures.tile.size(), 2u * cells.size());
   ASSERT_GT(textures.tileCount(), 0u);
   for (size_t v = 0; v < 2; ++v) {
@@ -202,7 +209,7 @@ TEST(VolumetricTextures, EveryBillboardHoldsAtMostItsShareOfTexels) {
       const uint32_t tile = textures.tile[v * cells.size() + c];
       if (tile == kNoTile) continue;
       int opaque = 0;
-      for (int t = 0; t < 16; ++t) opaque += textures.alpha[tile * 16 + t] > 0;
+      for (int t = 0; t < 16; ++t) opaque += textures.rgba[(tile * 16 + t) * 4 + 3] > 0;
       EXPECT_LE(opaque, int((1.0f - truth.transparency[c]) * 16.0f))
           << "view " << v << " cell " << c;
       EXPECT_GT(opaque, 0);
@@ -210,39 +217,153 @@ TEST(VolumetricTextures, EveryBillboardHoldsAtMostItsShareOfTexels) {
   }
 }
 
-TEST(VolumetricTextures, PackingNeverOverlapsAlphasAndKeepsEveryColour) {
-  ViewTextures textures;
-  textures.texels = 4;
-  textures.views = 1;
-  textures.cells = 300;
-  Random random(9, 2);
-  for (int i = 0; i < textures.cells; ++i) {
-    textures.tile.push_back(uint32_t(i));
-    for (int t = 0; t < 16; ++t) {
-      const bool opaque = random.uniform(0.0f, 1.0f) < 0.35f;
-      textures.alpha.push_back(opaque ? uint8_t(1 + random.nextUint() % 255) : 0);
-      for (int c = 0; c < 3; ++c) textures.rgb.push_back(uint8_t(random.nextUint() % 256));
-    }
+// A volume of 40 random cells of a level-2 grid with random transparencies.
+OpacityGrid randomVolume(uint64_t seed) {
+  Random random(seed, 1);
+  std::set<std::tuple<int, int, int>> chosen;
+  while (chosen.size() < 40)
+    chosen.insert({2 + int(random.nextUint() % 5), 2 + int(random.nextUint() % 5),
+                   2 + int(random.nextUint() % 5)});
+  std::vector<glm::ivec3> cells;
+  std::vector<float> transparency;
+  for (const auto& [z, y, x] : chosen) {  // lattice order (z, y, x), as the grid keeps it
+    cells.emplace_back(x, y, z);
+    transparency.push_back(random.uniform(0.2f, 0.9f));
   }
-  const PackedTextures packed = packTextures(textures);
-  ASSERT_EQ(packed.slotOfTile.size(), 300u);
-  EXPECT_LT(packed.slotCount(), 300u) << "some textures share a slot";
-  std::map<uint32_t, std::vector<size_t>> tilesOfSlot;
-  for (size_t tile = 0; tile < 300; ++tile) tilesOfSlot[packed.slotOfTile[tile]].push_back(tile);
-  for (const auto& [slot, tiles] : tilesOfSlot) {
-    ASSERT_LE(tiles.size(), 2u);
-    for (int t = 0; t < 16; ++t) {
-      int owners = 0;
-      for (size_t tile : tiles) owners += textures.alpha[tile * 16 + t] > 0;
-      EXPECT_LE(owners, 1) << "slot " << slot << " texel " << t;
-      for (size_t tile : tiles) {
-        if (textures.alpha[tile * 16 + t] == 0) continue;
-        for (int c = 0; c < 3; ++c)
-          EXPECT_EQ(packed.slotRgb[(slot * 16 + t) * 3 + c], textures.rgb[(tile * 16 + t) * 3 + c]);
+  return gridWith(2, cells, transparency);
+}
+
+// Mean |composited alpha − α_p| over the pixels of `view` that either covers: the view's
+// billboards composited front to back at every pixel centre, each texel looked up nearest.
+double compositingError(const OpacityGrid& grid, const ViewTextures& textures,
+                        const OpacityView& view, size_t v) {
+  const PixelCamera& cam = view.camera;
+  const glm::vec2 half = billboardHalfExtents(grid.cellSize, cam.right(), cam.up());
+  std::vector<size_t> order(grid.cells.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return cam.depth(grid.cellCenter(a)) < cam.depth(grid.cellCenter(b));
+  });
+  const int m = textures.texels;
+  double error = 0.0;
+  int pixels = 0;
+  for (int y = 0; y < cam.height(); ++y) {
+    for (int x = 0; x < cam.width(); ++x) {
+      double transmitted = 1.0;
+      for (size_t c : order) {
+        const uint32_t tile = textures.tile[v * grid.cells.size() + c];
+        if (tile == kNoTile) continue;
+        const glm::vec3 center = grid.cellCenter(c);
+        const glm::vec2 h = half * cam.focalPixels() / cam.depth(center);
+        const glm::vec2 unit =
+            (glm::vec2(x + 0.5f, y + 0.5f) - (cam.project(center) - h)) / (2.0f * h);
+        if (glm::any(glm::lessThan(unit, glm::vec2(0))) ||
+            glm::any(glm::greaterThanEqual(unit, glm::vec2(1))))
+          continue;
+        const int a = int(unit.x * float(m)), b = int(unit.y * float(m));
+        transmitted *=
+            1.0 - textures.rgba[(size_t(tile) * m * m + size_t(b) * m + a) * 4 + 3] / 255.0;
       }
+      const double alpha = view.image->at(x, y)[3];
+      if (alpha <= 0.0 && transmitted >= 1.0) continue;
+      error += std::abs((1.0 - transmitted) - alpha);
+      ++pixels;
     }
   }
-  EXPECT_EQ(packed.texelBytes(), 300u * 16 + packed.slotCount() * 48);
+  return pixels ? error / pixels : 0.0;
+}
+
+TEST(VolumetricTextures, PartitionCompositesBackToEachTrainingViewsAlpha) {
+  const OpacityGrid truth = randomVolume(5);
+  std::vector<CapturedView> captured = {syntheticView(truth, lookingAt({12, 1, 3}), 128),
+                                        syntheticView(truth, lookingAt({-2, 9, 8}), 128)};
+  const auto views = prepareViews(captured, 0.02f);
+  TextureSettings partition;
+  partition.texels = 8;
+  partition.hiddenCutoff = 0.0f;
+  TextureSettings paper = partition;
+  paper.selection = TexelSelection::kPaper;
+  const ViewTextures shared = generateViewTextures(truth, views, partition);
+  const ViewTextures selected = generateViewTextures(truth, views, paper);
+  for (size_t v = 0; v < views.size(); ++v) {
+    const double partitionError = compositingError(truth, shared, views[v], v);
+    const double paperError = compositingError(truth, selected, views[v], v);
+    // Texels are about a pixel wide, so only pixels where a billboard's texel centre falls in
+    // the neighbouring pixel differ; 8-bit alpha adds 1/510 at most per billboard.
+    EXPECT_LT(partitionError, 0.03) << "view " << v;
+    EXPECT_LT(partitionError, 0.5 * paperError) << "view " << v;
+  }
+}
+
+TEST(VolumetricTextures, HiddenTexturesAreDroppedOnlyBehindOpaqueCells) {
+  // Three cells in a row along x, seen along x: the front one nearly opaque.
+  const OpacityGrid truth = gridWith(1, {{0, 1, 1}, {1, 1, 1}, {2, 1, 1}}, {0.5f, 0.6f, 0.01f});
+  std::vector<CapturedView> captured = {syntheticView(truth, lookingAt({12, 0, 0}, 20.0f), 64)};
+  const auto views = prepareViews(captured, 0.02f);
+  TextureSettings settings;
+  settings.texels = 4;
+  settings.hiddenCutoff = 0.05f;
+  const ViewTextures textures = generateViewTextures(truth, views, settings);
+  EXPECT_NE(textures.tile[2], kNoTile) << "the front cell (x = 2, nearest the camera) is kept";
+  EXPECT_EQ(textures.tile[0], kNoTile) << "the back cell adds under 0.5 · 0.01 behind it";
+  EXPECT_EQ(textures.hiddenTiles, 2u);
+}
+
+TEST(VolumetricGrid, CoarserLevelKeepsTheChildrensOpticalDepthPerColumn) {
+  // Three children of one parent in a column and one alone in another parent.
+  const OpacityGrid fine =
+      gridWith(2, {{0, 0, 0}, {0, 0, 1}, {0, 0, 2}, {8, 8, 8}}, {0.5f, 0.5f, 0.5f, 0.2f});
+  const OpacityGrid coarse = coarsenGrid(fine, 1e-3f);
+  ASSERT_EQ(coarse.level, 1);
+  ASSERT_EQ(coarse.cells.size(), 2u);
+  EXPECT_EQ(coarse.cells[0], glm::ivec3(0, 0, 0));
+  EXPECT_EQ(coarse.cells[1], glm::ivec3(2, 2, 2));
+  EXPECT_NEAR(coarse.transparency[0], std::pow(0.125f, 1.0f / 9.0f), 1e-5f);
+  EXPECT_NEAR(coarse.transparency[1], std::pow(0.2f, 1.0f / 9.0f), 1e-5f);
+  EXPECT_FLOAT_EQ(coarse.cellSize, 3.0f * fine.cellSize);
+}
+
+TEST(VolumetricTextures, CompactTableFindsEveryCellsTileOfEveryView) {
+  // 40 views (two mask words), 5 cells; tiles numbered cell by cell in view order.
+  const size_t views = 40, cells = 5;
+  std::vector<uint32_t> full(views * cells, kNoTile);
+  uint32_t next = 0;
+  for (size_t c = 0; c < cells; ++c)
+    for (size_t v = 0; v < views; ++v)
+      if ((v * 7 + c * 3) % 5 < 2 || (c == 4 && v == 39)) full[v * cells + c] = next++;
+  const std::vector<uint32_t> table = compactTileTable(full, views, cells, 100);
+  ASSERT_EQ(table.size(), cells * 3);
+  size_t claimed = 0;
+  for (size_t c = 0; c < cells; ++c) {
+    claimed += tilesClaimed(table, views, c);
+    for (size_t v = 0; v < views; ++v) {
+      const uint32_t expected =
+          full[v * cells + c] == kNoTile ? kNoTile : full[v * cells + c] + 100;
+      ASSERT_EQ(tileOf(table, views, v, c), expected) << "view " << v << " cell " << c;
+    }
+  }
+  EXPECT_EQ(claimed, size_t(next));
+}
+
+TEST(VolumetricTextures, AtlasPagesHoldEveryTileWhereTheShadersLookForIt) {
+  const int m = 8, tiles = 70;
+  std::vector<uint8_t> rgba(size_t(tiles) * m * m * 4);
+  for (size_t i = 0; i < rgba.size(); ++i) rgba[i] = uint8_t((i * 7 + i / 256) % 251);
+  const TileAtlas atlas = layOutTiles(rgba, m, 32);  // 16 tiles a page
+  EXPECT_EQ(atlas.pageSize, 32);
+  ASSERT_EQ(atlas.pages.size(), 5u);
+  for (int t = 0; t < tiles; ++t) {
+    const int slot = t % atlas.tilesPerPage();
+    const ImageRgba8& page = atlas.pages[size_t(t / atlas.tilesPerPage())];
+    for (int b = 0; b < m; ++b)
+      for (int a = 0; a < m; ++a)
+        ASSERT_EQ(
+            std::memcmp(page.at(slot % atlas.tilesPerRow * m + a, slot / atlas.tilesPerRow * m + b),
+                        &rgba[(size_t(t) * m * m + size_t(b) * m + a) * 4], 4),
+            0)
+            << "tile " << t;
+  }
+  EXPECT_EQ(layOutTiles(rgba, m, 4096).pageSize, 128) << "the smallest page holding them all";
 }
 
 TEST(VolumetricOpacity, RejectsParametersOutOfRangeNamingTheKey) {
