@@ -368,6 +368,44 @@ def sweep_groups(variants):
     return {k: v for k, v in groups.items() if len(v) > 1}
 
 
+def plot_sweep(rows, tree, key, group, path):
+    """One numeric parameter's sweep: PSNR (left axis) and FLIP (right axis) against its value,
+    each point labelled with the variant's GPU memory (the papers' trade-off figures, e.g. the
+    volumetric paper's Fig. 10 for the cutoff). False when the values are not all numbers."""
+    points = []
+    for row in rows:
+        if row["tree"] != tree or row["variant"] not in group:
+            continue
+        match = re.search(rf"(?:\[|,){re.escape(key)}=([^,\]]+)", row["variant"])
+        value = number(match.group(1)) if match else None
+        psnr, flip, memory = number(row.get("psnr")), number(row.get("flip")), number(row.get("memory_total_mb"))
+        if value is None or psnr is None:
+            return False
+        points.append((value, psnr, flip, memory))
+    if len(points) < 2:
+        return False
+    points.sort()
+    fig, axis = plt.subplots(figsize=(5, 3.4))
+    xs = [p[0] for p in points]
+    axis.plot(xs, [p[1] for p in points], "o-", color="C0", label="PSNR")
+    for x, psnr, _, memory in points:
+        if memory is not None:
+            axis.annotate(f"{memory:.0f} MB", (x, psnr), textcoords="offset points", xytext=(0, 6),
+                          ha="center", fontsize=7)
+    axis.set_xlabel(key)
+    axis.set_ylabel("PSNR over coverage union (dB)", color="C0")
+    axis.grid(True, alpha=0.3)
+    flips = [(p[0], p[2]) for p in points if p[2] is not None]
+    if flips:
+        right = axis.twinx()
+        right.plot([f[0] for f in flips], [f[1] for f in flips], "s--", color="C3", label="FLIP")
+        right.set_ylabel("LDR-FLIP (lower is better)", color="C3")
+    axis.set_title(f"{tree}: {key} sweep", fontsize=9)
+    fig.tight_layout()
+    save_figure(fig, path)
+    return True
+
+
 def make_figures(run_dir: Path, out_root: Path):
     summary = run_dir / "summary.csv"
     meta_path = run_dir / "meta.json"
@@ -444,6 +482,10 @@ def make_figures(run_dir: Path, out_root: Path):
             made.append(f"- `{name}`: 128×128-pixel crops at full resolution of a close-up view (or the "
                         "nearest view when the run has no close-up ring).")
         for keys, group in sweep_groups(tree_variants).items():
+            name = f"sweep_{index.tree_name(tree)}_{keys.replace(',', '_')}.png"
+            if "," not in keys and plot_sweep(rows, tree, keys, group, out / name):
+                made.append(f"- `{name}`: mean PSNR and FLIP of the orbit views across the `{keys}` "
+                            "sweep, each point labelled with its GPU memory.")
             name = f"crops_{index.tree_name(tree)}_{keys.replace(',', '_')}.png"
             if crops(run_dir, index, tree, group, out / name):
                 made.append(f"- `{name}`: the same close-up across the `{keys}` sweep.")
