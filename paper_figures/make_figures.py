@@ -193,8 +193,10 @@ def plot_speedup_vs_trees(rows, trees, path):
                     continue
                 xs.append(n)
                 ys.append(speedup)
-                low.append(speedup - q25 if q25 is not None else 0.0)
-                high.append(q75 - speedup if q75 is not None else 0.0)
+                # The geometric mean may fall outside the per-camera IQR (skewed ratios): the bar
+                # then covers the IQR only on the side that reaches past the point.
+                low.append(max(0.0, speedup - q25) if q25 is not None else 0.0)
+                high.append(max(0.0, q75 - speedup) if q75 is not None else 0.0)
             if xs:
                 axis.errorbar(xs, ys, yerr=[low, high], marker="o", capsize=3, label=row["variant"])
         axis.axhline(1.0, color="k", linewidth=0.8)
