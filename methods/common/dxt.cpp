@@ -30,6 +30,12 @@ bool driverHasS3tc() {
   return false;
 }
 
+void requireS3tcFor(Compression compression) {
+  if (compression != Compression::kNone && !driverHasS3tc()) {
+    throwInputError("parameter 'compression': this OpenGL driver has no S3TC; use \"none\"");
+  }
+}
+
 GLenum srgbInternalFormat(Compression compression) {
   switch (compression) {
     case Compression::kDxt1:

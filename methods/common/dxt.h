@@ -22,6 +22,9 @@ std::vector<uint8_t> compressImage(const ImageRgba8& image, Compression compress
 
 // True when the current context can sample S3TC (GL_EXT_texture_compression_s3tc).
 bool driverHasS3tc();
+// Bad input (InputError naming the parameter) when `compression` needs S3TC and the current
+// context has none: every upload of a compressed texture checks through it.
+void requireS3tcFor(Compression compression);
 
 // The GL internal format of sRGB colour in the given compression (GL_SRGB8_ALPHA8 for kNone).
 GLenum srgbInternalFormat(Compression compression);

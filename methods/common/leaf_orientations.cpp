@@ -91,9 +91,7 @@ std::vector<ImageRgba8> buildOrientedLeafImages(const Tree& tree, const LeafImag
 
 gl::Texture uploadLeafImageArray(gl::Device& device, const std::vector<ImageRgba8>& images,
                                  const char* label, Compression compression) {
-  if (compression != Compression::kNone && !driverHasS3tc()) {
-    throwInputError("parameter 'compression': this OpenGL driver has no S3TC; use \"none\"");
-  }
+  requireS3tcFor(compression);
   const int size = images.empty() ? 1 : images[0].width;
   gl::Texture texture = device.createTexture(
       {GL_TEXTURE_2D_ARRAY, size, size, static_cast<int>(images.size()),

@@ -83,9 +83,7 @@ namespace canopy {
 
 gl::Texture uploadAlphaTestedTexture(gl::Device& device, const ImageRgba8& image, bool mipmaps,
                                      const char* label, Compression compression) {
-  if (compression != Compression::kNone && !driverHasS3tc()) {
-    throwInputError("parameter 'compression': this OpenGL driver has no S3TC; use \"none\"");
-  }
+  requireS3tcFor(compression);
   gl::Texture texture = device.createTexture({GL_TEXTURE_2D, image.width, image.height, 1,
                                               srgbInternalFormat(compression), mipmaps,
                                               gl::MemoryCategory::kTexture, label});

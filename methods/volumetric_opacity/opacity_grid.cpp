@@ -19,6 +19,14 @@ Aabb OpacityGrid::cellBox(size_t cell) const {
   return box;
 }
 
+void OpacityGrid::setLattice(const Aabb& cube, int subdivisions) {
+  root = cube;
+  level = subdivisions;
+  side = 1;
+  for (int l = 0; l < level; ++l) side *= 3;
+  cellSize = root.extent().x / float(side);
+}
+
 void OpacityGrid::rebuildLattice() {
   lattice.assign(size_t(side) * side * side, -1);
   for (size_t i = 0; i < cells.size(); ++i) {
@@ -63,11 +71,7 @@ Aabb enclosingCube(const Aabb& bounds) {
 OpacityGrid buildOpacityGrid(const Aabb& cube, int level, const std::vector<OpacityView>& views,
                              float foregroundAlpha) {
   OpacityGrid grid;
-  grid.root = cube;
-  grid.level = level;
-  grid.side = 1;
-  for (int l = 0; l < level; ++l) grid.side *= 3;
-  grid.cellSize = cube.extent().x / float(grid.side);
+  grid.setLattice(cube, level);
   // Level by level: keep the cells no view carves, split the kept ones 3×3×3 (§7).
   std::vector<glm::ivec3> current{glm::ivec3(0)};
   int side = 1;

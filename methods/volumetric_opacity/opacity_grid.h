@@ -27,6 +27,8 @@ struct OpacityGrid {
     return root.min + (glm::vec3(cells[cell]) + 0.5f) * cellSize;
   }
   Aabb cellBox(size_t cell) const;
+  // Sets the root cube and the level, and from them side = 3^level and the cell size.
+  void setLattice(const Aabb& cube, int subdivisions);
   int32_t cellAt(glm::ivec3 c) const {
     return lattice[(size_t(c.z) * side + size_t(c.y)) * side + size_t(c.x)];
   }

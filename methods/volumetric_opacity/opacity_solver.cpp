@@ -93,9 +93,13 @@ SolverResult solveByProjection(OpacityGrid& grid, const std::vector<OpacityView>
     const auto iterationStart = Clock::now();
     std::vector<double> squared(RowBlocks::kBlocks, 0.0), squaredLog(RowBlocks::kBlocks, 0.0);
     std::vector<int> rays(RowBlocks::kBlocks, 0);
+    // The pass after the last update only measures the final iterate.
+    const bool project = iteration < settings.maxIterations;
     tbb::parallel_for(0, RowBlocks::kBlocks, [&](int b) {
-      delta[b].assign(cellCount, 0.0);
-      weight[b].assign(cellCount, 0.0);
+      if (project) {
+        delta[b].assign(cellCount, 0.0);
+        weight[b].assign(cellCount, 0.0);
+      }
       std::vector<RaySegment> segments;
       for (size_t r = blocks.begin(b); r < blocks.end(b); ++r) {
         const auto [v, y] = blocks.rows[r];
@@ -110,6 +114,7 @@ SolverResult solveByProjection(OpacityGrid& grid, const std::vector<OpacityView>
                      const double qp = std::log(double(tp));
                      const double shift = (qp - sumLog) / double(cells.size());
                      for (const RaySegment& s : cells) {
+                       if (!project) break;
                        const double t = grid.transparency[s.cell];
                        const double projected = std::min(1.0, t * std::exp(shift));
                        delta[b][s.cell] += s.weight * (projected - t);  // Eq. 13
@@ -143,8 +148,7 @@ SolverResult solveByProjection(OpacityGrid& grid, const std::vector<OpacityView>
           iteration, log.rmsLog, result.bestIteration, bestLog, result.bestIteration);
       break;
     }
-    // The last pass only measured the final iterate.
-    if (iteration == settings.maxIterations) break;
+    if (!project) break;
     // End of the iteration: every cell moves by its normalised δ; above the cutoff it empties.
     for (size_t c = 0; c < cellCount; ++c) {
       if (grid.transparency[c] >= 1.0f) continue;

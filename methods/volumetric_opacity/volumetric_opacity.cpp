@@ -194,24 +194,25 @@ class VolumetricOpacity final : public Method {
   void upload(gl::Device& device) override {
     using gl::MemoryCategory;
     std::vector<uint32_t> coords, tiles, orders;
+    mLevelBases.clear();
     for (const VolumetricLevel& level : mModel.levels) {
+      mLevelBases.push_back({coords.size(), tiles.size(), orders.size()});
       for (const glm::ivec3& c : level.grid.cells)
         coords.push_back(uint32_t(c.x) | uint32_t(c.y) << 10 | uint32_t(c.z) << 20);
       tiles.insert(tiles.end(), level.table.begin(), level.table.end());
       orders.insert(orders.end(), level.orders.begin(), level.orders.end());
     }
-    const auto storage = [&](MemoryCategory category, const auto& data, const char* label) {
+    const auto storage = [&](MemoryCategory category, std::vector<uint32_t>& data,
+                             const char* label) {
       // Storage buffers may not be empty; one word stands in for nothing.
-      std::vector<uint32_t> padded = data;
-      if (padded.empty()) padded.push_back(0);
-      return device.createBuffer(category, GL_SHADER_STORAGE_BUFFER, padded, label);
+      if (data.empty()) data.push_back(0);
+      return device.createBuffer(category, GL_SHADER_STORAGE_BUFFER, data, label);
     };
     mBuffers[0] = storage(MemoryCategory::kGeometry, coords, "cell coordinates of every level");
     mBuffers[1] = storage(MemoryCategory::kGeometry, orders, "back-to-front orders");
     mBuffers[2] = storage(MemoryCategory::kOther, tiles, "first tile and view mask of each cell");
     const TileAtlas& atlas = mModel.atlas;
-    if (mModel.compression != Compression::kNone && !driverHasS3tc())
-      throwInputError("parameter 'compression': this OpenGL driver has no S3TC; use \"none\"");
+    requireS3tcFor(mModel.compression);
     mAtlas = device.createTexture({GL_TEXTURE_2D_ARRAY, atlas.pageSize, atlas.pageSize,
                                    int(atlas.pages.size()), srgbInternalFormat(mModel.compression),
                                    false, MemoryCategory::kTexture, "billboard atlas"});
@@ -388,12 +389,7 @@ class VolumetricOpacity final : public Method {
     mSignature = fnv1aMix(mSignature, l + 1);
     const VolumetricLevel& level = mModel.levels[l];
     if (level.grid.cells.empty()) return;
-    size_t cellBase = 0, tileBase = 0, orderBase = 0;
-    for (size_t k = 0; k < l; ++k) {
-      cellBase += mModel.levels[k].grid.cells.size();
-      tileBase += mModel.levels[k].table.size();
-      orderBase += mModel.levels[k].orders.size();
-    }
+    const LevelBases& bases = mLevelBases[l];
     const glm::mat3 toModel = glm::inverse(glm::mat3(model));
     const glm::vec3 right =
         glm::normalize(toModel * glm::vec3(frame.view[0][0], frame.view[1][0], frame.view[2][0]));
@@ -420,11 +416,11 @@ class VolumetricOpacity final : public Method {
     mProgram.set("uModel", model);
     mProgram.set("uRootMin", level.grid.root.min);
     mProgram.set("uCellSize", cellSize);
-    mProgram.set("uCellBase", int(cellBase));
-    mProgram.set("uTileBase", int(tileBase));
+    mProgram.set("uCellBase", int(bases.cell));
+    mProgram.set("uTileBase", int(bases.table));
     mProgram.set("uTableStride", int(tableStride(mModel.cameraDirections.size())));
     mProgram.set("uOrderOffset",
-                 int(orderBase + nearestOrder(direction) * level.grid.cells.size()));
+                 int(bases.order + nearestOrder(direction) * level.grid.cells.size()));
     mProgram.set("uQuadRight", right);
     mProgram.set("uQuadUp", up);
     mProgram.set("uQuadHalf", half);
@@ -466,6 +462,11 @@ class VolumetricOpacity final : public Method {
   gl::Texture mAtlas;
   gl::Program mProgram;
   gl::VertexArray mVao;
+  // Where each level starts in the shared storage buffers (set at upload).
+  struct LevelBases {
+    size_t cell, table, order;
+  };
+  std::vector<LevelBases> mLevelBases;
   uint64_t mSignature = 0;
   std::vector<uint64_t> mInstancesPerLevel;  // of the last draw
 };
@@ -496,11 +497,7 @@ void VolumetricOpacity::load(AssetFolder& asset) {
   for (size_t l = 0; l < fields.levels.size(); ++l) {
     VolumetricLevel level;
     OpacityGrid& grid = level.grid;
-    grid.root = fields.root;
-    grid.level = fields.levels[l];
-    grid.side = 1;
-    for (int k = 0; k < grid.level; ++k) grid.side *= 3;
-    grid.cellSize = grid.root.extent().x / float(grid.side);
+    grid.setLattice(fields.root, fields.levels[l]);
     grid.nonEmptyPerLevel = fields.cellsPerLevel;
     grid.cells = asset.readBlobAs<glm::ivec3>(fmt::format("cells_{}.bin", l));
     grid.transparency = asset.readBlobAs<float>(fmt::format("transparency_{}.bin", l));
