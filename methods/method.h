@@ -73,6 +73,10 @@ struct FrameContext {
   // kShadowMapUnit, which methods leave alone) and the light's view-projection. 0: no shadows.
   GLuint shadowMap = 0;
   glm::mat4 lightViewProjection{1.0f};
+  // Dithered cross-fades (methods/common/dither.glsl): the mesh shaders keep a fragment whose
+  // screen dither threshold lies in [x, y). A method that fades one instance between two of its
+  // representations draws them with complementary ranges; the harness leaves it {0, 1}.
+  glm::vec2 ditherKeep{0.0f, 1.0f};
 
   // Output pixels spanned by a world length `size` seen from `distance` (the LoD measure).
   float projectedPixels(float size, float distance) const {

@@ -4,6 +4,7 @@
 #include "methods/billboard_cloud/billboard_cloud.h"
 #include "methods/method.h"
 #include "methods/multilayer_indirect/multilayer_indirect.h"
+#include "methods/octahedral/octahedral.h"
 #include "methods/polygonal/polygonal.h"
 #include "methods/single_leaf_indirect/single_leaf_indirect.h"
 #include "methods/volumetric_opacity/volumetric_opacity.h"
@@ -42,6 +43,7 @@ const MethodRegistry& builtinMethods() {
     registerMultilayerIndirect(r);
     registerBboxHierarchy(r);
     registerVolumetricOpacity(r);
+    registerOctahedral(r);
     return r;
   }();
   return registry;

@@ -14,10 +14,10 @@ uniform int uShadows;  // 1: uShadowMap holds the light's depth
 uniform sampler2DShadow uShadowMap;
 uniform mat4 uLightViewProjection;
 
-// Fraction of the light reaching the fragment: 3×3 percentage-closer filtering.
-float lightVisibility(vec3 normal) {
+// Fraction of the light reaching world point `position`: 3×3 percentage-closer filtering.
+float lightVisibilityAt(vec3 position, vec3 normal) {
   if (uShadows == 0) return 1.0;
-  vec4 p = uLightViewProjection * vec4(vWorldPosition, 1.0);
+  vec4 p = uLightViewProjection * vec4(position, 1.0);
   vec3 q = p.xyz / p.w * 0.5 + 0.5;
   if (any(lessThan(q, vec3(0.0))) || any(greaterThan(q, vec3(1.0)))) return 1.0;
   float slope = 1.0 - abs(dot(normal, uLightDirection));
@@ -30,12 +30,17 @@ float lightVisibility(vec3 normal) {
   return sum / 9.0;
 }
 
-// The factor albedo is multiplied by: `normal` faces the viewer, `occlusion` scales the ambient.
-float lighting(vec3 normal, float occlusion) {
+// The factor albedo is multiplied by at world point `position` (impostors that reconstruct the
+// surface pass its point, not the quad's): `normal` faces the viewer, `occlusion` scales the
+// ambient.
+float lightingAt(vec3 position, vec3 normal, float occlusion) {
   if (uLit == 0) return 1.0;
   return uAmbient * (uUseAmbientOcclusion != 0 ? occlusion : 1.0) +
-         (1.0 - uAmbient) * max(dot(normal, uLightDirection), 0.0) * lightVisibility(normal);
+         (1.0 - uAmbient) * max(dot(normal, uLightDirection), 0.0) *
+             lightVisibilityAt(position, normal);
 }
+float lighting(vec3 normal, float occlusion) { return lightingAt(vWorldPosition, normal, occlusion); }
 #else
+float lightingAt(vec3 position, vec3 normal, float occlusion) { return 1.0; }
 float lighting(vec3 normal, float occlusion) { return 1.0; }
 #endif

@@ -38,6 +38,7 @@ void setFrameUniforms(const gl::Program& program, const FrameContext& frame) {
   program.set("uShadows", frame.shadowMap != 0 && frame.shading == Shading::kLit ? 1 : 0);
   program.set("uShadowMap", kShadowMapUnit);
   program.set("uLightViewProjection", frame.lightViewProjection);
+  program.set("uDitherKeep", frame.ditherKeep);
 }
 
 void WoodRenderer::bake(const Tree& tree) {

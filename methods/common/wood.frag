@@ -7,10 +7,12 @@ uniform sampler2D uWoodTexture;  // sRGB, so samples are linear
 uniform int uHasTexture;
 uniform vec3 uBaseColor;         // linear
 #include "methods/common/lighting.glsl"
+#include "methods/common/dither.glsl"
 
 out vec4 outColor;
 
 void main() {
+  if (ditherRejects()) discard;
   vec3 color = uBaseColor;
   if (uHasTexture != 0) color *= texture(uWoodTexture, vUv).rgb;
   if (uLit != 0) {

@@ -7,10 +7,12 @@ in float vOcclusion;  // baked AO of lit runs, 1 otherwise
 uniform sampler2DArray uLeafImages;  // layer 0 front, uBackLayer back; sRGB, so samples are linear
 uniform float uBackLayer;            // 1 for two-sided images, 0 when the back is the front
 #include "methods/common/lighting.glsl"
+#include "methods/common/dither.glsl"
 
 out vec4 outColor;
 
 void main() {
+  if (ditherRejects()) discard;
   vec4 texel = texture(uLeafImages, vec3(vUv, gl_FrontFacing ? 0.0 : uBackLayer));
   if (texel.a < 0.5) discard;
   vec3 color = texel.rgb;
