@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include <fmt/format.h>
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -10,7 +11,7 @@
 #include "methods/common/lod_instances.h"
 #include "methods/common/mesh.h"
 #include "methods/common/mipmaps.h"
-#include "methods/octahedral/mesh_fade.h"
+#include "methods/octahedral/instance_lod.h"
 #include "methods/octahedral/octahedral_capture.h"
 #include "methods/octahedral/octahedral_mapping.h"
 
@@ -31,6 +32,7 @@ struct OctahedralParams {
   bool mipmaps = true;
   std::string compression = "dxt5";
   bool wood = true;
+  float blendPixels = 96.0f;
   float meshPixels = 0.0f;
   float fadeBand = 0.25f;
 
@@ -42,7 +44,7 @@ struct OctahedralParams {
     v("atlas_size", atlasSize, 64, 8192,
       "colour atlas texels per side; each frame gets atlas_size / N (the memory knob)");
     v("normal_depth_divisor", normalDepthDivisor, 1, 4,
-      "1, 2 or 4: the normal-depth atlas has atlas_size / divisor texels per side");
+      "1, 2 or 4: the depth and normal atlases have atlas_size / divisor texels per side");
     v("supersample", supersample, 1, 8, "capture rays per texel side (coverage and colour)");
     v("padding", padding, 1, 16, "transparent texels around each frame, so filtering stays inside");
     v("blend", blend, {"three", "nearest"},
@@ -51,8 +53,11 @@ struct OctahedralParams {
       "depth reprojection steps per frame lookup (0: each frame read at the quad point)");
     v("mipmaps", mipmaps, "mipmapped atlases (coverage-preserving colour levels)");
     v("compression", compression, {"none", "dxt5"},
-      "both atlases uncompressed or BC3 (S3TC): colour sRGB, normal-depth linear");
+      "colour as BC3 (S3TC, sRGB) and normals as BC1, or both RGBA8; depth is always R8");
     v("wood", wood, "capture the trunk and branches into the frames (false: leaves only)");
+    v("blend_pixels", blendPixels, 0.0f, 100000.0f,
+      "an instance whose bounding radius spans fewer output pixels draws its nearest frame alone "
+      "(0: every instance blends three)");
     v("mesh_pixels", meshPixels, 0.0f, 100000.0f,
       "an instance whose bounding radius spans this many output pixels is drawn as the polygonal "
       "mesh (0: never; the mesh then costs no memory)");
@@ -74,12 +79,13 @@ struct AssetFields {
   }
 };
 
-constexpr GLenum kLinearDxt5 = 0x83F3;  // GL_COMPRESSED_RGBA_S3TC_DXT5_EXT
+constexpr GLenum kLinearDxt1 = 0x83F0;  // GL_COMPRESSED_RGB_S3TC_DXT1_EXT
 
 class OctahedralMethod final : public Method {
  public:
   explicit OctahedralMethod(OctahedralParams params)
-      : mParams(std::move(params)), mMesh(mParams.meshPixels, mParams.fadeBand) {
+      : mParams(std::move(params)),
+        mLod(mParams.meshPixels, mParams.fadeBand, mParams.blendPixels) {
     mCellTexels = cellTexels(mParams);
   }
 
@@ -96,7 +102,8 @@ class OctahedralMethod final : public Method {
     for (int d = mParams.normalDepthDivisor; d > 1; d /= 2) mNormalDepth = halveImage(mNormalDepth);
     mCenter = frames.center;
     mRadius = frames.radius;
-    mMesh.bake(tree, ctx);
+    findFrameRects();
+    mLod.bake(tree, ctx);
     mReport = {{"frames", mParams.frames * mParams.frames},
                {"frame_texels", mCellTexels - 2 * mParams.padding},
                {"atlas", {mColor.width, mColor.height}},
@@ -108,75 +115,53 @@ class OctahedralMethod final : public Method {
     const Compression compression = parseCompression(mParams.compression);
     mColorTexture =
         uploadAlphaTestedTexture(device, mColor, mParams.mipmaps, "octahedral colour", compression);
-    mNormalDepthTexture = uploadLinearTexture(device, mNormalDepth, compression);
+    uploadDepthAndNormals(device, compression);
+    mRectBuffer = device.createBuffer(gl::MemoryCategory::kGeometry, GL_SHADER_STORAGE_BUFFER,
+                                      mFrameRects, "octahedral frame rectangles");
     mVao = gl::createVertexArray();
     gl::api().BindVertexArray(0);
-    mProgram = device.createProgram({gl::embeddedShader("methods/octahedral/octahedral.vert"),
-                                     gl::embeddedShader("methods/octahedral/octahedral.frag")});
-    mMesh.upload(device, device.owner() + "/frame");
+    // Three frames (unless blend is "nearest") and one; the blend and the parallax steps are
+    // compiled in, so the fragment loops unroll.
+    mProgram = buildProgram(device, mParams.blend == "three" ? 3 : 1, mFragmentText);
+    mNearestFrameProgram = buildProgram(device, 1, mNearestFrameText);
+    mLod.upload(device, device.owner() + "/frame");
   }
 
   void draw(const FrameContext& frame, std::span<const Instance> instances) override {
     if (instances.empty()) return;
     // Near instances are the mesh (or fade into it); the impostor draws the rest.
-    std::vector<MeshCrossFade::ImpostorDraw> draws{
-        {0, static_cast<GLsizei>(instances.size()), {0.0f, 1.0f}}};
-    GLuint instanceBuffer = frame.instanceBuffer;
-    const std::vector<MeshCrossFade::State>* states = nullptr;
-    if (mMesh.enabled()) {
-      states = &mMesh.drawMeshSide(frame, instances, mCenter, mRadius);
-      draws = mMesh.impostorDraws();
-      instanceBuffer = mMesh.impostorBuffer();
-    }
+    const std::vector<InstanceLod::State>& states =
+        mLod.sortAndDrawMesh(frame, instances, mCenter, mRadius);
     updateSignature(frame, instances, states);
     const gl::Api& g = gl::api();
-    mProgram.use();
-    setFrameUniforms(mProgram, frame);
-    const glm::mat4 cameraToWorld = glm::inverse(frame.view);
-    const bool orthographic = frame.projection[3][3] == 1.0f;
-    mProgram.set("uEye", glm::vec3(cameraToWorld[3]));
-    mProgram.set("uForward", -glm::normalize(glm::vec3(cameraToWorld[2])));
-    mProgram.set("uOrthographic", orthographic ? 1 : 0);
-    mProgram.set("uViewer", frame.cameraPosition);
-    mProgram.set("uLodFocalPixels", frame.lodFocalPixels);
-    const int inner = mCellTexels - 2 * mParams.padding;
-    // Levels past log2(padding) + 1 would mix neighbouring frames.
-    mProgram.set("uMaxLod", mParams.mipmaps ? std::log2(float(mParams.padding)) + 1.0f : 0.0f);
-    mProgram.set("uCenter", mCenter);
-    mProgram.set("uRadius", mRadius);
-    mProgram.set("uFrames", mParams.frames);
-    mProgram.set("uHemisphere", mParams.hemisphere ? 1 : 0);
-    mProgram.set("uBlendFrames", mParams.blend == "three" ? 3 : 1);
-    mProgram.set("uInnerTexels", float(inner));
-    const float atlas = float(mCellTexels * mParams.frames);
-    mProgram.set("uCellUv", float(mCellTexels) / atlas);
-    mProgram.set("uPaddingUv", float(mParams.padding) / atlas);
-    mProgram.set("uInnerUv", float(inner) / atlas);
-    mProgram.set("uParallaxSteps", mParams.parallaxSteps);
-    mProgram.set("uNormalDepthLodOffset", std::log2(float(mParams.normalDepthDivisor)));
-    mProgram.set("uColor", 0);
-    mProgram.set("uNormalDepth", 1);
+    const gl::Program* current = nullptr;
     g.ActiveTexture(GL_TEXTURE0);
     g.BindTexture(GL_TEXTURE_2D, mColorTexture.id());
     g.ActiveTexture(GL_TEXTURE1);
-    g.BindTexture(GL_TEXTURE_2D, mNormalDepthTexture.id());
+    g.BindTexture(GL_TEXTURE_2D, mDepthTexture.id());
+    g.ActiveTexture(GL_TEXTURE2);
+    g.BindTexture(GL_TEXTURE_2D, mNormalTexture.id());
     g.BindVertexArray(mVao.id());
-    for (const MeshCrossFade::ImpostorDraw& draw : draws) {
-      mProgram.set("uDitherKeep", draw.ditherKeep);
-      bindInstanceMatrices(instanceBuffer, 4, draw.first);
+    g.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, mRectBuffer.id());
+    for (const InstanceLod::ImpostorDraw& draw : mLod.impostorDraws()) {
+      const gl::Program& program = draw.frames == 3 ? mProgram : mNearestFrameProgram;
+      if (&program != current) setUniforms(program, frame), current = &program;
+      program.set("uDitherKeep", draw.ditherKeep);
+      bindInstanceMatrices(mLod.impostorBuffer(), 4, draw.first);
       g.DrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, draw.count);
     }
     g.BindVertexArray(0);
-    g.ActiveTexture(GL_TEXTURE1);
-    g.BindTexture(GL_TEXTURE_2D, 0);
+    g.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
+    for (GLenum unit : {GL_TEXTURE2, GL_TEXTURE1}) {
+      g.ActiveTexture(unit);
+      g.BindTexture(GL_TEXTURE_2D, 0);
+    }
     g.ActiveTexture(GL_TEXTURE0);
   }
 
   uint64_t lodSignature() const override { return mSignature; }
-  uint64_t leafPolygonsDrawn() const override { return mMesh.leafPolygonsDrawn(); }
-  std::vector<uint64_t> instancesPerLevel() const override {
-    return mMesh.enabled() ? mMesh.instancesPerState() : std::vector<uint64_t>{};
-  }
+  uint64_t leafPolygonsDrawn() const override { return mLod.leafPolygonsDrawn(); }
+  std::vector<uint64_t> instancesPerLevel() const override { return mLod.instancesPerState(); }
   nlohmann::json effectiveParams() const override { return writeParams(mParams); }
   nlohmann::json bakeReport() const override { return mReport; }
 
@@ -185,7 +170,7 @@ class OctahedralMethod final : public Method {
     asset.writeFields(AssetFields{mCellTexels, mCenter, mRadius});
     asset.writeImage("color.png", mColor);
     asset.writeImage("normal_depth.png", mNormalDepth);
-    mMesh.save(asset);
+    mLod.save(asset);
     asset.writeHeader();
   }
 
@@ -196,7 +181,7 @@ class OctahedralMethod final : public Method {
     mColor = asset.readImage("color.png");
     mNormalDepth = asset.readImage("normal_depth.png");
     asset.finishReading();
-    mMesh.load(asset);
+    mLod.load(asset);
     const int side = mCellTexels * mParams.frames;
     if (fields.cellTexels != mCellTexels || mColor.width != side || mColor.height != side ||
         mNormalDepth.width != side / mParams.normalDepthDivisor ||
@@ -206,10 +191,17 @@ class OctahedralMethod final : public Method {
                       asset.folder().string());
     mCenter = fields.center;
     mRadius = fields.radius;
+    findFrameRects();
   }
 
  private:
   OctahedralGrid grid() const { return {mParams.frames, mParams.hemisphere}; }
+
+  // Margin: the coarsest mip level's texel (2 · padding base texels) plus its bilinear reach.
+  void findFrameRects() {
+    const int margin = mParams.mipmaps ? 3 * mParams.padding : 1;
+    mFrameRects = frameCoverageRects(mColor, mParams.frames, mCellTexels, mParams.padding, margin);
+  }
 
   // A frame's cell: the largest size within atlas_size / N that keeps every cell a whole number
   // of 4×4 blocks in both atlases (the normal-depth one divided).
@@ -227,34 +219,89 @@ class OctahedralMethod final : public Method {
     return cell;
   }
 
-  gl::Texture uploadLinearTexture(gl::Device& device, const ImageRgba8& image,
-                                  Compression compression) const {
+  // Uses `program` (the three-frame or the one-frame one) and sets what every draw shares.
+  void setUniforms(const gl::Program& program, const FrameContext& frame) const {
+    program.use();
+    setFrameUniforms(program, frame);
+    const glm::mat4 cameraToWorld = glm::inverse(frame.view);
+    const bool orthographic = frame.projection[3][3] == 1.0f;
+    program.set("uEye", glm::vec3(cameraToWorld[3]));
+    program.set("uForward", -glm::normalize(glm::vec3(cameraToWorld[2])));
+    program.set("uOrthographic", orthographic ? 1 : 0);
+    program.set("uViewer", frame.cameraPosition);
+    program.set("uLodFocalPixels", frame.lodFocalPixels);
+    const int inner = mCellTexels - 2 * mParams.padding;
+    // Levels past log2(padding) + 1 would mix neighbouring frames.
+    program.set("uMaxLod", mParams.mipmaps ? std::log2(float(mParams.padding)) + 1.0f : 0.0f);
+    program.set("uCenter", mCenter);
+    program.set("uRadius", mRadius);
+    program.set("uFrames", mParams.frames);
+    program.set("uHemisphere", mParams.hemisphere ? 1 : 0);
+    program.set("uBlendFrames", &program == &mProgram && mParams.blend == "three" ? 3 : 1);
+    program.set("uInnerTexels", float(inner));
+    const float atlas = float(mCellTexels * mParams.frames);
+    program.set("uCellUv", float(mCellTexels) / atlas);
+    program.set("uPaddingUv", float(mParams.padding) / atlas);
+    program.set("uInnerUv", float(inner) / atlas);
+    program.set("uDepthLodOffset", std::log2(float(mParams.normalDepthDivisor)));
+    program.set("uColor", 0);
+    program.set("uDepth", 1);
+    program.set("uNormals", 2);
+  }
+
+  gl::Program buildProgram(gl::Device& device, int frames, std::string& text) const {
+    const gl::ShaderSource& fragment = gl::embeddedShader("methods/octahedral/octahedral.frag");
+    text = std::string(fragment.text);
+    text.insert(text.find('\n') + 1,
+                fmt::format("#define BLEND_FRAMES {}\n#define PARALLAX_STEPS {}\n", frames,
+                            mParams.parallaxSteps));
+    return device.createProgram(
+        {gl::embeddedShader("methods/octahedral/octahedral.vert"), {fragment.path, text}});
+  }
+
+  // The normal-depth atlas goes up as two textures: depth as R8, one byte a texel that the
+  // parallax steps read uncompressed (several reads per frame and fragment), and normals, read
+  // once per frame by lit frames only, as BC1 (or RGBA8 uncompressed).
+  void uploadDepthAndNormals(gl::Device& device, Compression compression) {
     requireS3tcFor(compression);
     const bool compressed = compression != Compression::kNone;
-    gl::Texture texture = device.createTexture(
-        {GL_TEXTURE_2D, image.width, image.height, 1, compressed ? kLinearDxt5 : GLenum(GL_RGBA8),
-         mParams.mipmaps, gl::MemoryCategory::kTexture, "octahedral normal-depth"});
-    ImageRgba8 level = image;
-    for (int l = 0; l < texture.levels; ++l) {
+    const auto create = [&](GLenum format, const char* label) {
+      return device.createTexture({GL_TEXTURE_2D, mNormalDepth.width, mNormalDepth.height, 1,
+                                   format, mParams.mipmaps, gl::MemoryCategory::kTexture, label});
+    };
+    mDepthTexture = create(GL_R8, "octahedral depth");
+    mNormalTexture = create(compressed ? kLinearDxt1 : GLenum(GL_RGBA8), "octahedral normals");
+    ImageRgba8 level = mNormalDepth;
+    for (int l = 0; l < mDepthTexture.levels; ++l) {
       if (l > 0) level = halveImage(level);
+      // Depth out of the alpha channel; the normals opaque, so BC1 keeps four colours a block.
+      ImageRgba8 normals = level;
+      std::vector<uint8_t> depth(level.pixels.size() / 4);
+      for (size_t i = 0; i < depth.size(); ++i) {
+        depth[i] = level.pixels[4 * i + 3];
+        normals.pixels[4 * i + 3] = 255;
+      }
+      device.uploadTextureLevel(mDepthTexture, l, GL_RED, GL_UNSIGNED_BYTE, depth.data());
       if (compressed)
-        device.uploadCompressedLevel(texture, l, 0, compressImage(level, compression));
+        device.uploadCompressedLevel(mNormalTexture, l, 0,
+                                     compressImage(normals, Compression::kDxt1));
       else
-        device.uploadTextureLevel(texture, l, GL_RGBA, GL_UNSIGNED_BYTE, level.pixels.data());
+        device.uploadTextureLevel(mNormalTexture, l, GL_RGBA, GL_UNSIGNED_BYTE,
+                                  normals.pixels.data());
     }
-    gl::setTextureSampling(texture, true, false);
-    return texture;
+    gl::setTextureSampling(mDepthTexture, true, false);
+    gl::setTextureSampling(mNormalTexture, true, false);
   }
 
   // The frame triple each instance shows from the viewer and whether it is the mesh, fading or
   // the impostor: the popping metric's marks.
   void updateSignature(const FrameContext& frame, std::span<const Instance> instances,
-                       const std::vector<MeshCrossFade::State>* states) {
+                       const std::vector<InstanceLod::State>& states) {
     uint64_t hash = 0xcbf29ce484222325ull;
     const OctahedralGrid octahedralGrid = grid();
     for (size_t i = 0; i < instances.size(); ++i) {
       const Instance& instance = instances[i];
-      if (states) hash = fnv1aMix(hash, static_cast<uint64_t>((*states)[i]));
+      hash = fnv1aMix(hash, static_cast<uint64_t>(states[i]));
       const glm::mat4 toLocal = glm::inverse(instance.modelMatrix());
       const glm::vec3 eye = glm::vec3(toLocal * glm::vec4(frame.cameraPosition, 1.0f));
       const glm::vec3 offset = eye - mCenter;
@@ -272,11 +319,15 @@ class OctahedralMethod final : public Method {
   ImageRgba8 mColor, mNormalDepth;
   glm::vec3 mCenter{0.0f};
   float mRadius = 1.0f;
-  gl::Texture mColorTexture, mNormalDepthTexture;
+  std::vector<glm::vec4> mFrameRects;  // frameCoverageRects of the colour atlas
+  gl::Texture mColorTexture, mDepthTexture, mNormalTexture;
+  gl::Buffer mRectBuffer;
+  // octahedral.frag with the compile-time constants of each program (the programs' sources).
+  std::string mFragmentText, mNearestFrameText;
   gl::VertexArray mVao;
-  gl::Program mProgram;
+  gl::Program mProgram, mNearestFrameProgram;
   uint64_t mSignature = 0;
-  MeshCrossFade mMesh;
+  InstanceLod mLod;
 };
 
 }  // namespace

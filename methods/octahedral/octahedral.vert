@@ -4,6 +4,9 @@
 // the same functions); the quad spans the bounding sphere's silhouette on the plane through its
 // centre, so every reprojected surface point lies behind some quad fragment.
 layout(location = 4) in mat4 inModel;  // per instance, locations 4..7
+// Each frame's covered rectangle in its image coordinates (x0, y0, x1, y1; −1 … 1 across the
+// sphere), frame (i, j) at j · N + i; empty frames have x0 > x1.
+layout(std430, binding = 0) readonly buffer FrameRects { vec4 frameRects[]; };
 
 uniform mat4 uViewProjection;
 uniform vec3 uEye;           // world: the camera (perspective views)
@@ -107,7 +110,9 @@ void main() {
       uInnerTexels / (2.0 * uRadius * scale) * viewerDistance / max(uLodFocalPixels, 1e-6);
   vLod = clamp(log2(max(texelsPerPixel, 1.0)), 0.0, uMaxLod);
 
-  // The quad: perpendicular to the view, spanning the sphere's silhouette on its centre plane.
+  // The quad: perpendicular to the view through the sphere's centre, cut to where the chosen
+  // frames' covered rectangles, each a box through the sphere's depth along its frame, project
+  // (from the eye, or along the view for orthographic frames). Within the sphere's silhouette.
   vec3 w = -direction;
   vec3 reference = abs(w.y) > 0.999 ? vec3(0.0, 0.0, -1.0) : vec3(0.0, 1.0, 0.0);
   vec3 right = normalize(cross(reference, -w));
@@ -116,8 +121,31 @@ void main() {
   if (uOrthographic == 0)
     halfSide = min(uRadius * distance / sqrt(max(distance * distance - uRadius * uRadius,
                                               0.0625 * uRadius * uRadius)), 4.0 * uRadius);
-  vec2 corner = vec2(gl_VertexID & 1, gl_VertexID >> 1) * 2.0 - 1.0;
-  vLocalPosition = uCenter + (right * corner.x + up * corner.y) * halfSide;
+  vec2 lo = vec2(halfSide), hi = vec2(-halfSide);
+  bool whole = false;  // a box corner behind the eye: the silhouette square
+  for (int k = 0; k < 3; ++k) {
+    vec4 r = frameRects[frames[k].y * uFrames + frames[k].x];
+    if (vWeights[k] <= 0.0 || r.x > r.z) continue;
+    for (int c = 0; c < 8; ++c) {
+      vec3 corner = uCenter + uRadius * (vRight[k] * ((c & 1) != 0 ? r.z : r.x) +
+                                         vUp[k] * ((c & 2) != 0 ? r.w : r.y) +
+                                         vToCamera[k] * ((c & 4) != 0 ? 1.0 : -1.0));
+      vec3 offset = corner - uCenter;
+      if (uOrthographic == 0) {
+        float along = dot(corner - vEyeLocal, w);  // distance in front of the eye
+        if (along < 0.05 * uRadius) whole = true;
+        offset = vEyeLocal + (corner - vEyeLocal) * (distance / max(along, 1e-6)) - uCenter;
+      }
+      vec2 q = vec2(dot(offset, right), dot(offset, up));
+      lo = min(lo, q);
+      hi = max(hi, q);
+    }
+  }
+  if (whole) lo = vec2(-halfSide), hi = vec2(halfSide);
+  lo = max(lo, vec2(-halfSide));
+  hi = max(min(hi, vec2(halfSide)), lo);
+  vec2 corner = vec2(gl_VertexID & 1, gl_VertexID >> 1);
+  vLocalPosition = uCenter + right * mix(lo.x, hi.x, corner.x) + up * mix(lo.y, hi.y, corner.y);
   vec4 world = inModel * vec4(vLocalPosition, 1.0);
   vWorldPosition = world.xyz;
   gl_Position = uViewProjection * world;

@@ -231,4 +231,33 @@ ImageRgba8 halveImage(const ImageRgba8& image) {
   return half;
 }
 
+std::vector<glm::vec4> frameCoverageRects(const ImageRgba8& color, int frames, int cellTexels,
+                                          int padding, int marginTexels) {
+  const int inner = cellTexels - 2 * padding;
+  std::vector<glm::vec4> rects(size_t(frames) * frames, glm::vec4(1.0f, 1.0f, -1.0f, -1.0f));
+  for (int j = 0; j < frames; ++j) {
+    for (int i = 0; i < frames; ++i) {
+      glm::ivec4 box(inner, inner, -1, -1);  // covered texels: x0, y0, x1, y1 (inclusive)
+      for (int y = 0; y < inner; ++y) {
+        const uint8_t* row = &color.pixels[(size_t(j * cellTexels + padding + y) * color.width +
+                                            size_t(i * cellTexels + padding)) *
+                                           4];
+        for (int x = 0; x < inner; ++x) {
+          if (row[4 * x + 3] == 0) continue;
+          box = {std::min(box.x, x), std::min(box.y, y), std::max(box.z, x), std::max(box.w, y)};
+        }
+      }
+      if (box.z < 0) continue;
+      // Texel t spans [t, t + 1] / inner · 2 − 1.
+      const auto edge = [&](int texel) {
+        return std::clamp(float(texel) / float(inner) * 2.0f - 1.0f, -1.0f, 1.0f);
+      };
+      rects[size_t(j) * frames + i] = {edge(box.x - marginTexels), edge(box.y - marginTexels),
+                                       edge(box.z + 1 + marginTexels),
+                                       edge(box.w + 1 + marginTexels)};
+    }
+  }
+  return rects;
+}
+
 }  // namespace canopy

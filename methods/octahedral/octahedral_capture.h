@@ -1,6 +1,9 @@
 #pragma once
 
+#include <vector>
+
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
 #include "common/image.h"
 #include "common/tree.h"
@@ -44,5 +47,12 @@ OctahedralFrames captureOctahedralFrames(const Tree& tree,
 // resolution): odd sizes keep their last row or column. Straight averages are right here because
 // empty texels were dilated.
 ImageRgba8 halveImage(const ImageRgba8& image);
+
+// Each frame's covered rectangle (any texel with alpha > 0), grown by `marginTexels`, as
+// (x0, y0, x1, y1) in the frame's image coordinates: −1 … 1 across the sphere's square, x along
+// the frame's right axis, y along its up. Frame (i, j) at index j · N + i; an empty frame gets
+// an empty rectangle (x0 > x1). The draw cuts each quad to its frames' rectangles.
+std::vector<glm::vec4> frameCoverageRects(const ImageRgba8& color, int frames, int cellTexels,
+                                          int padding, int marginTexels);
 
 }  // namespace canopy

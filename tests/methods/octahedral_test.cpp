@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include <glm/geometric.hpp>
@@ -176,6 +177,26 @@ TEST(OctahedralCapture, FramesHoldTheTreeWithCoverageDepthAndNormals) {
   }
 }
 
+// The covered rectangle of a frame with texels (2, 5) and (4, 6) covered: texel t spans
+// [t, t + 1] / inner · 2 − 1, grown by the margin and clamped to the frame.
+TEST(OctahedralCapture, FrameRectanglesBoundTheCoveredTexels) {
+  const int frames = 2, cell = 12, padding = 2, inner = cell - 2 * padding;
+  ImageRgba8 atlas(frames * cell, frames * cell);
+  const auto cover = [&](int frameX, int frameY, int x, int y) {
+    atlas.pixels[(size_t(frameY * cell + padding + y) * atlas.width + frameX * cell + padding + x) *
+                     4 +
+                 3] = 200;
+  };
+  cover(1, 0, 2, 5);
+  cover(1, 0, 4, 6);
+  const std::vector<glm::vec4> rects = frameCoverageRects(atlas, frames, cell, padding, 1);
+  ASSERT_EQ(rects.size(), 4u);
+  const auto edge = [&](int t) { return std::clamp(float(t) / inner * 2.0f - 1.0f, -1.0f, 1.0f); };
+  const glm::vec4 expected(edge(1), edge(4), edge(6), edge(8));
+  for (int c = 0; c < 4; ++c) EXPECT_FLOAT_EQ(rects[1][c], expected[c]) << c;
+  for (int f : {0, 2, 3}) EXPECT_GT(rects[f].x, rects[f].z) << "frame " << f << " is empty";
+}
+
 // Near the camera the impostor is the polygonal mesh, far away the impostor alone, and in the
 // band between each pixel comes from one of the two (complementary dither ranges), the mesh's
 // share growing with the tree's size in pixels.
@@ -221,6 +242,10 @@ TEST(OctahedralMeshFade, TheMeshReplacesTheImpostorNearTheCameraThroughADithered
     EXPECT_EQ(image.pixels, harness.render(*expected, camera).pixels) << pixels << " px";
     harness.render(*fading, camera);
     EXPECT_EQ(fading->leafPolygonsDrawn(), expected == mesh.get() ? leaves : 0u);
+    // States: mesh, fading, three frames, one frame (below blend_pixels, default 96).
+    EXPECT_EQ(fading->instancesPerLevel(),
+              (expected == mesh.get() ? std::vector<uint64_t>{1, 0, 0, 0}
+                                      : std::vector<uint64_t>{0, 0, 0, 1}));
   }
 
   // At 30 px the mesh's share is (30 − 20) / 20 = 0.5: every pixel is the mesh's or the
@@ -228,6 +253,7 @@ TEST(OctahedralMeshFade, TheMeshReplacesTheImpostorNearTheCameraThroughADithered
   const Camera camera = cameraAt(30.0f);
   const ImageRgba8 blend = harness.render(*fading, camera);
   EXPECT_EQ(fading->leafPolygonsDrawn(), leaves);
+  EXPECT_EQ(fading->instancesPerLevel(), (std::vector<uint64_t>{0, 1, 0, 0}));
   const ImageRgba8 meshImage = harness.render(*mesh, camera);
   const ImageRgba8 impostorImage = harness.render(*impostor, camera);
   size_t fromMesh = 0, differing = 0, fromNeither = 0;

@@ -11,24 +11,27 @@
 
 namespace canopy {
 
-// The polygonal mesh an impostor turns into near the camera, through a dithered cross-fade (as
-// engines fade an impostor against its mesh): an instance whose bounding radius spans at least
-// `meshPixels` output pixels is drawn as the reference mesh, one below meshPixels · (1 − band) as
-// the impostor, one in between as both with complementary dither ranges (the mesh's share grows
-// linearly with the radius in pixels). meshPixels = 0 turns the mesh off: nothing is baked or
-// uploaded for it.
-class MeshCrossFade {
+// Each frame's instances sorted by the output pixels their bounding radius spans, largest first:
+// the polygonal mesh (from `meshPixels` on), a dithered cross-fade between mesh and impostor
+// (from meshPixels · (1 − band); the mesh's share grows linearly with the pixels), the impostor
+// blending three frames, and below `blendPixels` the impostor's nearest frame alone (engines
+// drop the blend for far impostors too). meshPixels = 0: no mesh, nothing baked or uploaded for
+// it; blendPixels = 0: every impostor blends.
+class InstanceLod {
  public:
-  enum class State : uint8_t { kImpostor = 0, kFading = 1, kMesh = 2 };
-  // An instance the impostor draws: its index in impostorBuffer() and the dither range it keeps.
+  // Finest first (instancesPerState's order).
+  enum class State : uint8_t { kMesh = 0, kFading = 1, kBlended = 2, kNearestFrame = 3 };
+  // Impostor instances drawn in one call: from `first` in impostorBuffer(), with three frames
+  // or one, keeping the dither range `ditherKeep`.
   struct ImpostorDraw {
     GLint first = 0;
     GLsizei count = 0;
+    int frames = 3;
     glm::vec2 ditherKeep{0.0f, 1.0f};
   };
 
-  MeshCrossFade(float meshPixels, float band);
-  bool enabled() const { return mMeshPixels > 0.0f; }
+  InstanceLod(float meshPixels, float band, float blendPixels);
+  bool meshEnabled() const { return mMeshPixels > 0.0f; }
 
   void bake(const Tree& tree, BakeContext& ctx);
   // `owner` is the ledger owner the per-frame instance buffers are charged to.
@@ -38,15 +41,16 @@ class MeshCrossFade {
 
   // Sorts the frame's instances by their bounding sphere (tree space: center, radius) in output
   // pixels, draws the mesh side and fills the impostor's draws (impostorBuffer()). Returns the
-  // state of each instance in span order (the LoD signature's marks).
-  const std::vector<State>& drawMeshSide(const FrameContext& frame,
-                                         std::span<const Instance> instances, glm::vec3 center,
-                                         float radius);
+  // state of each instance in span order (the LoD signature's marks). frame.forcedLevel >= 0
+  // puts every instance in that state.
+  const std::vector<State>& sortAndDrawMesh(const FrameContext& frame,
+                                            std::span<const Instance> instances, glm::vec3 center,
+                                            float radius);
   GLuint impostorBuffer() const { return mImpostorBuffer.id(); }
   const std::vector<ImpostorDraw>& impostorDraws() const { return mImpostorDraws; }
 
   uint64_t leafPolygonsDrawn() const { return mLeafPolygonsDrawn; }
-  // Instances drawn as mesh only, fading, impostor only in the last frame.
+  // Instances in each state in the last frame, finest first.
   std::vector<uint64_t> instancesPerState() const;
 
  private:
@@ -55,6 +59,7 @@ class MeshCrossFade {
 
   float mMeshPixels = 0.0f;
   float mBand = 0.25f;
+  float mBlendPixels = 0.0f;
   std::unique_ptr<Method> mMesh;
   gl::Device* mDevice = nullptr;
   std::string mOwner;
