@@ -77,6 +77,25 @@ inline int runCommand(const std::string& command, std::string* errorOutput = nul
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+// Runs `command` on a virtual X server (xvfb-run -a) and returns the command's own exit code:
+// xvfb-run replaces it with 5 when removing its temporary folder fails after the command ended,
+// which happens here now and then and says nothing about the program under test.
+inline int runUnderXvfb(const std::string& command, std::string* errorOutput = nullptr) {
+  const std::filesystem::path base =
+      std::filesystem::temp_directory_path() / ("canopy_xvfb_" + std::to_string(::getpid()));
+  const std::string script = base.string() + ".sh", codeFile = base.string() + ".code";
+  std::filesystem::remove(codeFile);
+  // A script, so the command keeps its own quoting.
+  std::ofstream(script) << command << "\necho $? > " << codeFile << "\n";
+  const int xvfbCode = runCommand("xvfb-run -a sh " + script, errorOutput);
+  std::ifstream in(codeFile);
+  int code = xvfbCode;
+  if (!(in >> code)) code = xvfbCode;  // the server never started: xvfb-run's own code
+  std::filesystem::remove(codeFile);
+  std::filesystem::remove(script);
+  return code;
+}
+
 // A record of fields["kind"] holding `fields` and defaults for the rest, read through the strict
 // schema: concise test records of the real format.
 inline Record makeRecord(const nlohmann::json& fields) {

@@ -26,10 +26,10 @@ TEST_P(ViewerScreenshot, ShowsTheTreeInTheFramedRegion) {
   test::TempDir dir;
   const auto shot = dir / "shot.png";
   std::string error;
-  const int code = test::runCommand(
-      "xvfb-run -a " + kView + " --tree sparse --leaves 300 --method " + GetParam() +
-          quickParams(GetParam()) + " --width 320 --height 240 --frames 2 --hide-ui --screenshot " +
-          shot.string() + " --bookmarks " + (dir / "b.json").string(),
+  const int code = test::runUnderXvfb(
+      kView + " --tree sparse --leaves 300 --method " + GetParam() + quickParams(GetParam()) +
+          " --width 320 --height 240 --frames 2 --hide-ui --screenshot " + shot.string() +
+          " --bookmarks " + (dir / "b.json").string(),
       &error);
   ASSERT_EQ(code, 0) << error;
   const ImageRgba8 image = readImage(shot);
@@ -64,11 +64,11 @@ TEST(Viewer, LitShadowedScreenshotIsTheTreeAndDarkerThanUnlit) {
   for (const char* mode : {"", " --shadows"}) {
     const auto shot = dir / (std::string(mode).empty() ? "unlit.png" : "shadows.png");
     std::string error;
-    ASSERT_EQ(test::runCommand("xvfb-run -a " + kView +
-                                   " --tree sparse --leaves 300 --method multilayer_indirect"
-                                   " --width 240 --height 200 --frames 2 --hide-ui" +
-                                   mode + " --screenshot " + shot.string(),
-                               &error),
+    ASSERT_EQ(test::runUnderXvfb(kView +
+                                     " --tree sparse --leaves 300 --method multilayer_indirect"
+                                     " --width 240 --height 200 --frames 2 --hide-ui" +
+                                     mode + " --screenshot " + shot.string(),
+                                 &error),
               0)
         << error;
   }
@@ -119,12 +119,12 @@ TEST(Viewer, BadInputIsOneLineAndExitCode2) {
     EXPECT_EQ(errorLines(error), 1) << options << ": " << error;
   }
   // A screenshot into a folder that does not exist names the folder.
-  EXPECT_EQ(test::runCommand("xvfb-run -a " + kView +
-                                 " --tree sparse --leaves 200 --hide-ui --frames 1 --screenshot " +
-                                 (dir / "missing" / "x.png").string() + " --bookmarks " +
-                                 (dir / "b.json").string(),
-                             &error),
-            2);
+  EXPECT_EQ(
+      test::runUnderXvfb(kView + " --tree sparse --leaves 200 --hide-ui --frames 1 --screenshot " +
+                             (dir / "missing" / "x.png").string() + " --bookmarks " +
+                             (dir / "b.json").string(),
+                         &error),
+      2);
   EXPECT_NE(error.find((dir / "missing").string()), std::string::npos) << error;
 }
 
