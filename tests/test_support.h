@@ -63,6 +63,21 @@ inline std::unique_ptr<gl::Context> makeTestContext() {
   return gl::createContext({gl::Backend::kOsMesa});
 }
 
+// A registered method made from `params`, baked from `tree` and uploaded through `device`, its
+// GPU memory charged to `owner` (the method's name when empty).
+inline std::unique_ptr<Method> bakeAndUpload(gl::Device& device, const Tree& tree,
+                                             const std::string& name, const nlohmann::json& params,
+                                             Shading shading = Shading::kUnlit,
+                                             const std::string& owner = "") {
+  auto method = builtinMethods().find(name).create(params, "test");
+  BakeContext context;
+  context.shading = shading;
+  method->bake(tree, context);
+  gl::Device::OwnerScope scope(device, owner.empty() ? name : owner);
+  method->upload(device);
+  return method;
+}
+
 // Runs a command; returns its exit code and captures stderr into `errorOutput`.
 inline int runCommand(const std::string& command, std::string* errorOutput = nullptr) {
   const std::string errorFile = (std::filesystem::temp_directory_path() /

@@ -87,13 +87,7 @@ TEST(LitFairness, TheReferenceGetsTheImpostorsAmbientOcclusionOrNobodyDoes) {
   harness.setTree(tree.bounds, tree.leaves.size());
   const auto bake = [&](const std::string& name, const nlohmann::json& params, Shading shading,
                         const std::string& owner) {
-    auto method = builtinMethods().find(name).create(params, "test");
-    BakeContext context;
-    context.shading = shading;
-    method->bake(tree, context);
-    gl::Device::OwnerScope scope(device, owner);
-    method->upload(device);
-    return method;
+    return test::bakeAndUpload(device, tree, name, params, shading, owner);
   };
   const Camera camera = orbitCamera(tree.bounds, {2.5f, 20.0f, 30.0f}, 40.0f);
   // Baked for a lit run, the reference carries AO (its ledger shows the per-vertex values) and

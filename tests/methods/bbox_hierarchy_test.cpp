@@ -176,12 +176,7 @@ TEST(BboxHierarchy, BoxImageMatchesTheLeavesInsideTheBox) {
   camera.nearPlane = radius * 15.0f;
   camera.farPlane = radius * 25.0f;
   const auto render = [&](const std::string& name, const nlohmann::json& params) {
-    auto m = builtinMethods().find(name).create(params, "test");
-    BakeContext ctx;
-    m->bake(tree, ctx);
-    gl::Device::OwnerScope scope(device, name);
-    m->upload(device);
-    return harness.render(*m, camera);
+    return harness.render(*test::bakeAndUpload(device, tree, name, params), camera);
   };
   // Only the root has images (volume ratio 1), about one texel per pixel of the view.
   const ImageRgba8 reference = render("polygonal", {{"wood", false}});

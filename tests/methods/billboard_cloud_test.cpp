@@ -179,11 +179,7 @@ TEST(BillboardCapture, BillboardSeenAlongItsNormalMatchesItsLeaves) {
   settings.fovYDegrees = 2.0f;  // far and narrow: nearly orthographic, as the capture
   Harness harness(device, settings);
   const auto render = [&](const std::string& method, const nlohmann::json& p) {
-    auto m = builtinMethods().find(method).create(p, "test");
-    BakeContext ctx;
-    m->bake(cluster, ctx);
-    gl::Device::OwnerScope scope(device, method);
-    m->upload(device);
+    auto m = test::bakeAndUpload(device, cluster, method, p);
     const float radius = cluster.boundingSphereRadius();
     Camera camera;
     camera.target = chosen->center;

@@ -255,12 +255,7 @@ struct VariantBench {
   }
   std::unique_ptr<Method> bake(const Tree& tree, const nlohmann::json& params,
                                const std::string& owner) {
-    auto m = builtinMethods().find("multilayer_indirect").create(params, "test");
-    BakeContext ctx;
-    m->bake(tree, ctx);
-    gl::Device::OwnerScope scope(device, owner);
-    m->upload(device);
-    return m;
+    return test::bakeAndUpload(device, tree, "multilayer_indirect", params, Shading::kUnlit, owner);
   }
 };
 

@@ -222,12 +222,7 @@ TEST(OctahedralMeshFade, TheMeshReplacesTheImpostorNearTheCameraThroughADithered
     return camera;
   };
   const auto make = [&](const std::string& name, const nlohmann::json& params) {
-    auto m = builtinMethods().find(name).create(params, "test");
-    BakeContext ctx;
-    m->bake(tree, ctx);
-    gl::Device::OwnerScope scope(device, name);
-    m->upload(device);
-    return m;
+    return test::bakeAndUpload(device, tree, name, params);
   };
   auto mesh = make("polygonal", nlohmann::json::object());
   auto impostor = make("octahedral", {{"atlas_size", 512}});
