@@ -6,6 +6,7 @@
 #include <glm/geometric.hpp>
 
 #include "bench/harness.h"
+#include "common/error.h"
 #include "common/random.h"
 #include "methods/method.h"
 #include "methods/octahedral/octahedral_capture.h"
@@ -269,6 +270,24 @@ TEST(OctahedralMeshFade, TheMeshReplacesTheImpostorNearTheCameraThroughADithered
   // 0.5 ± 0.15: the 4×4 Bayer pattern keeps exactly half of its pixels; the rest is how the
   // differing pixels fall on the pattern.
   EXPECT_NEAR(double(fromMesh) / differing, 0.5, 0.15);
+
+  // The mesh is saved with the impostor and loads back into the same band image; an asset
+  // without it is bad input.
+  test::TempDir dir;
+  AssetFolder asset(dir.path());
+  fading->save(asset);
+  auto loaded = builtinMethods().find("octahedral").create(fading->effectiveParams(), "test");
+  AssetFolder reader(dir.path());
+  loaded->load(reader);
+  {
+    gl::Device::OwnerScope scope(device, "loaded");
+    loaded->upload(device);
+  }
+  EXPECT_EQ(harness.render(*loaded, camera).pixels, blend.pixels);
+  std::filesystem::remove_all(dir.path() / "mesh");
+  auto broken = builtinMethods().find("octahedral").create(fading->effectiveParams(), "test");
+  AssetFolder again(dir.path());
+  EXPECT_THROW(broken->load(again), InputError);
 }
 
 }  // namespace
