@@ -290,5 +290,24 @@ TEST(OctahedralMeshFade, TheMeshReplacesTheImpostorNearTheCameraThroughADithered
   EXPECT_THROW(broken->load(again), InputError);
 }
 
+TEST(Octahedral, BadParametersNameTheParameter) {
+  test::expectParameterErrorsNameTheKey("octahedral", {{"frames", 1},
+                                                       {"atlas_size", 10},
+                                                       {"normal_depth_divisor", 3},
+                                                       {"blend", "two"},
+                                                       {"compression", "dxt1"},
+                                                       {"parallax_steps", -1},
+                                                       {"mesh_pixels", -1.0},
+                                                       {"fade_band", 0.0},
+                                                       {"blend_pixels", "far"}});
+  // Frames too small for their padding: the message names atlas_size and what to change.
+  try {
+    builtinMethods().find("octahedral").create({{"atlas_size", 256}, {"frames", 32}}, "test");
+    ADD_FAILURE() << "a 256² atlas of 32 × 32 frames was accepted";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("atlas_size"), std::string::npos) << error.what();
+  }
+}
+
 }  // namespace
 }  // namespace canopy
