@@ -4,13 +4,13 @@
 
 #include <glm/geometric.hpp>
 
-#include "methods/polygonal/polygonal.h"
-
 namespace canopy {
 
 InstanceLod::InstanceLod(float meshPixels, float band, float blendPixels)
     : mMeshPixels(meshPixels), mBand(band), mBlendPixels(blendPixels) {
-  if (meshEnabled()) mMesh = makePolygonalReference();
+  // The reference at its defaults, through the registry: no method reaches into another's files.
+  if (meshEnabled())
+    mMesh = builtinMethods().find("polygonal").create(nlohmann::json::object(), "octahedral mesh");
 }
 
 void InstanceLod::bake(const Tree& tree, BakeContext& ctx) {

@@ -212,8 +212,4 @@ void registerPolygonal(MethodRegistry& registry) {
       {.cost = {.bakeSeconds = 0.0, .frameCost = 1.0}});
 }
 
-std::unique_ptr<Method> makePolygonalReference() {
-  return std::make_unique<Polygonal>(PolygonalParams{});
-}
-
 }  // namespace canopy
