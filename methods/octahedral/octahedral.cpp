@@ -81,6 +81,13 @@ struct AssetFields {
 
 constexpr GLenum kLinearDxt1 = 0x83F0;  // GL_COMPRESSED_RGB_S3TC_DXT1_EXT
 
+// A program of the impostor with its frame count compiled in (and told to the vertex shader).
+struct FrameProgram {
+  gl::Program program;
+  int frames = 3;            // BLEND_FRAMES: 3 or 1
+  std::string fragmentText;  // octahedral.frag with its constants (the program's source)
+};
+
 class OctahedralMethod final : public Method {
  public:
   explicit OctahedralMethod(OctahedralParams params)
@@ -122,8 +129,8 @@ class OctahedralMethod final : public Method {
     gl::api().BindVertexArray(0);
     // Three frames (unless blend is "nearest") and one; the blend and the parallax steps are
     // compiled in, so the fragment loops unroll.
-    mProgram = buildProgram(device, mParams.blend == "three" ? 3 : 1, mFragmentText);
-    mNearestFrameProgram = buildProgram(device, 1, mNearestFrameText);
+    buildProgram(device, mParams.blend == "three" ? 3 : 1, mBlended);
+    buildProgram(device, 1, mOneFrame);
     mLod.upload(device, device.owner() + "/frame");
   }
 
@@ -134,7 +141,7 @@ class OctahedralMethod final : public Method {
         mLod.sortAndDrawMesh(frame, instances, mCenter, mRadius);
     updateSignature(frame, instances, states);
     const gl::Api& g = gl::api();
-    const gl::Program* current = nullptr;
+    const FrameProgram* current = nullptr;
     g.ActiveTexture(GL_TEXTURE0);
     g.BindTexture(GL_TEXTURE_2D, mColorTexture.id());
     g.ActiveTexture(GL_TEXTURE1);
@@ -144,9 +151,9 @@ class OctahedralMethod final : public Method {
     g.BindVertexArray(mVao.id());
     g.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, mRectBuffer.id());
     for (const InstanceLod::ImpostorDraw& draw : mLod.impostorDraws()) {
-      const gl::Program& program = draw.frames == 3 ? mProgram : mNearestFrameProgram;
+      const FrameProgram& program = draw.frames == 3 ? mBlended : mOneFrame;
       if (&program != current) setUniforms(program, frame), current = &program;
-      program.set("uDitherKeep", draw.ditherKeep);
+      program.program.set("uDitherKeep", draw.ditherKeep);
       bindInstanceMatrices(mLod.impostorBuffer(), 4, draw.first);
       g.DrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, draw.count);
     }
@@ -181,7 +188,6 @@ class OctahedralMethod final : public Method {
     mColor = asset.readImage("color.png");
     mNormalDepth = asset.readImage("normal_depth.png");
     asset.finishReading();
-    mLod.load(asset);
     const int side = mCellTexels * mParams.frames;
     if (fields.cellTexels != mCellTexels || mColor.width != side || mColor.height != side ||
         mNormalDepth.width != side / mParams.normalDepthDivisor ||
@@ -192,6 +198,7 @@ class OctahedralMethod final : public Method {
     mCenter = fields.center;
     mRadius = fields.radius;
     findFrameRects();
+    mLod.load(asset);
   }
 
  private:
@@ -219,8 +226,9 @@ class OctahedralMethod final : public Method {
     return cell;
   }
 
-  // Uses `program` (the three-frame or the one-frame one) and sets what every draw shares.
-  void setUniforms(const gl::Program& program, const FrameContext& frame) const {
+  // Uses `frameProgram` and sets what every draw shares.
+  void setUniforms(const FrameProgram& frameProgram, const FrameContext& frame) const {
+    const gl::Program& program = frameProgram.program;
     program.use();
     setFrameUniforms(program, frame);
     const glm::mat4 cameraToWorld = glm::inverse(frame.view);
@@ -237,7 +245,7 @@ class OctahedralMethod final : public Method {
     program.set("uRadius", mRadius);
     program.set("uFrames", mParams.frames);
     program.set("uHemisphere", mParams.hemisphere ? 1 : 0);
-    program.set("uBlendFrames", &program == &mProgram && mParams.blend == "three" ? 3 : 1);
+    program.set("uBlendFrames", frameProgram.frames);
     program.set("uInnerTexels", float(inner));
     const float atlas = float(mCellTexels * mParams.frames);
     program.set("uCellUv", float(mCellTexels) / atlas);
@@ -249,14 +257,15 @@ class OctahedralMethod final : public Method {
     program.set("uNormals", 2);
   }
 
-  gl::Program buildProgram(gl::Device& device, int frames, std::string& text) const {
+  void buildProgram(gl::Device& device, int frames, FrameProgram& out) const {
     const gl::ShaderSource& fragment = gl::embeddedShader("methods/octahedral/octahedral.frag");
-    text = std::string(fragment.text);
-    text.insert(text.find('\n') + 1,
-                fmt::format("#define BLEND_FRAMES {}\n#define PARALLAX_STEPS {}\n", frames,
-                            mParams.parallaxSteps));
-    return device.createProgram(
-        {gl::embeddedShader("methods/octahedral/octahedral.vert"), {fragment.path, text}});
+    out.frames = frames;
+    out.fragmentText = std::string(fragment.text);
+    out.fragmentText.insert(out.fragmentText.find('\n') + 1,
+                            fmt::format("#define BLEND_FRAMES {}\n#define PARALLAX_STEPS {}\n",
+                                        frames, mParams.parallaxSteps));
+    out.program = device.createProgram({gl::embeddedShader("methods/octahedral/octahedral.vert"),
+                                        {fragment.path, out.fragmentText}});
   }
 
   // The normal-depth atlas goes up as two textures: depth as R8, one byte a texel that the
@@ -322,10 +331,9 @@ class OctahedralMethod final : public Method {
   std::vector<glm::vec4> mFrameRects;  // frameCoverageRects of the colour atlas
   gl::Texture mColorTexture, mDepthTexture, mNormalTexture;
   gl::Buffer mRectBuffer;
-  // octahedral.frag with the compile-time constants of each program (the programs' sources).
-  std::string mFragmentText, mNearestFrameText;
   gl::VertexArray mVao;
-  gl::Program mProgram, mNearestFrameProgram;
+  // Instances of at least blend_pixels (three frames, one when blend is "nearest") and below.
+  FrameProgram mBlended, mOneFrame;
   uint64_t mSignature = 0;
   InstanceLod mLod;
 };
