@@ -176,6 +176,9 @@ class Method {
   // The instances the last draw() drew at each level of detail, finest first; empty for methods
   // that do not report levels. Recorded in the records' "drawn" as "instances_per_level".
   virtual std::vector<uint64_t> instancesPerLevel() const { return {}; }
+  // The instances the last draw() drew at each wood level of detail, finest first (the full
+  // mesh); empty for methods that always draw the full wood mesh or none.
+  virtual std::vector<uint64_t> woodInstancesPerLevel() const { return {}; }
   // The baked representation, so bake and render can run apart.
   virtual void save(AssetFolder& asset) const = 0;
   virtual void load(AssetFolder& asset) = 0;

@@ -30,7 +30,7 @@ struct BboxParams {
   int minBoxLeaves = 16;
   int spatialLeaves = 200;
   int supersample = 4;
-  bool drawWood = true;
+  WoodParams wood;
 
   template <class Visitor>
   void visit(Visitor& v) {
@@ -49,7 +49,7 @@ struct BboxParams {
     v("spatial_leaves", spatialLeaves, 1, 1000000,
       "spatial hierarchy: at most this many leaves per finest box");
     v("supersample", supersample, 1, 8, "capture samples per texel side");
-    v("wood", drawWood, "draw the trunk and branches as geometry");
+    wood.visit(v);
   }
 };
 
@@ -134,7 +134,7 @@ class BboxHierarchy final : public Method {
   explicit BboxHierarchy(BboxParams params) : mParams(std::move(params)) {}
 
   void bake(const Tree& tree, BakeContext&) override {
-    mWood.bake(tree);
+    mWood.bake(tree, mParams.wood.levels());
     const bool hasBranches = !tree.branches.empty();
     if (mParams.hierarchy == "branches" && !hasBranches) {
       throwInputError(
@@ -267,7 +267,7 @@ class BboxHierarchy final : public Method {
                                      gl::embeddedShader("methods/bbox_hierarchy/box.frag")});
     mDevice = &device;
     mFrameOwner = device.owner() + "/frame";
-    if (mParams.drawWood) mWood.upload(device, true);
+    if (mParams.wood.draw) mWood.upload(device, true);
   }
 
   void draw(const FrameContext& frame, std::span<const Instance> instances) override {
@@ -338,13 +338,14 @@ class BboxHierarchy final : public Method {
           leafRanges[n].second);
     }
     g.BindVertexArray(0);
-    if (mParams.drawWood) mWood.draw(frame, instances.size());
+    if (mParams.wood.draw) mWood.draw(frame, instances, mParams.wood.errorPixels);
   }
 
-  uint64_t lodSignature() const override { return mSignature; }
+  uint64_t lodSignature() const override { return fnv1aMix(mSignature, mWood.lodSignature()); }
   uint64_t leafPolygonsDrawn() const override { return mLeafPolygonsDrawn; }
+  std::vector<uint64_t> woodInstancesPerLevel() const override { return mWood.instancesPerLevel(); }
   nlohmann::json effectiveParams() const override { return writeParams(mParams); }
-  nlohmann::json bakeReport() const override { return mReport; }
+  nlohmann::json bakeReport() const override { return mWood.withLevels(mReport); }
 
   void save(AssetFolder& asset) const override {
     asset.describe("bbox_hierarchy", effectiveParams(), mReport);

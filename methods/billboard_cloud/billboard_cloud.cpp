@@ -26,7 +26,7 @@ struct BillboardCloudParams {
   int supersample = 4;
   int maxBillboardTexels = 1024;
   bool mipmaps = true;
-  bool drawWood = true;
+  WoodParams wood;
   std::string compression = "none";
 
   template <class Visitor>
@@ -37,7 +37,7 @@ struct BillboardCloudParams {
     v("supersample", supersample, 1, 8, "capture samples per texel side");
     v("max_billboard_texels", maxBillboardTexels, 1, 8192, "cap on one billboard's texture side");
     v("mipmaps", mipmaps, "mipmapped atlas (trilinear, coverage-preserving levels)");
-    v("wood", drawWood, "draw the trunk and branches as geometry");
+    wood.visit(v);
     v("compression", compression, {"none", "dxt1", "dxt5"},
       "the atlas: uncompressed, BC1 or BC3 (S3TC)");
   }
@@ -55,7 +55,7 @@ class BillboardCloudMethod final : public Method {
   void bake(const Tree& tree, BakeContext& ctx) override {
     mLevels = {};
     mLevels.treeBounds = tree.bounds;
-    mWood.bake(tree);
+    mWood.bake(tree, mParams.wood.levels());
     const std::vector<BillboardCloud> clouds = buildBillboardCloudFamily(
         tree, mParams.cloud.clustering, mParams.cloud.divisors(), ctx.seed);
     mReport = {{"clouds", describeClouds(clouds)}};
@@ -113,7 +113,7 @@ class BillboardCloudMethod final : public Method {
         device.createProgram({gl::embeddedShader("methods/common/mesh.vert"),
                               gl::embeddedShader("methods/common/alpha_tested_texture.frag")});
     mLod.attach(device, device.owner() + "/frame");
-    if (mParams.drawWood) mWood.upload(device, true);
+    if (mParams.wood.draw) mWood.upload(device, true);
   }
 
   void draw(const FrameContext& frame, std::span<const Instance> instances) override {
@@ -128,12 +128,15 @@ class BillboardCloudMethod final : public Method {
     g.BindVertexArray(mVao.id());
     mLevels.draw(mLod, {});
     g.BindVertexArray(0);
-    if (mParams.drawWood) mWood.draw(frame, instances.size());
+    if (mParams.wood.draw) mWood.draw(frame, instances, mParams.wood.errorPixels);
   }
 
-  uint64_t lodSignature() const override { return mLod.signature(); }
+  uint64_t lodSignature() const override {
+    return fnv1aMix(mLod.signature(), mWood.lodSignature());
+  }
+  std::vector<uint64_t> woodInstancesPerLevel() const override { return mWood.instancesPerLevel(); }
   nlohmann::json effectiveParams() const override { return writeParams(mParams); }
-  nlohmann::json bakeReport() const override { return mReport; }
+  nlohmann::json bakeReport() const override { return mWood.withLevels(mReport); }
 
   void save(AssetFolder& asset) const override {
     asset.describe("billboard_cloud", effectiveParams(), mReport);

@@ -4,6 +4,8 @@
 #include <array>
 #include <numeric>
 
+#include <glm/geometric.hpp>
+
 #include <fmt/format.h>
 
 #include "common/image.h"
@@ -41,11 +43,9 @@ void setFrameUniforms(const gl::Program& program, const FrameContext& frame) {
   program.set("uDitherKeep", frame.ditherKeep);
 }
 
-void WoodRenderer::bake(const Tree& tree) {
+void WoodRenderer::bake(const Tree& tree, bool levels) {
   const WoodMesh& wood = tree.wood;
   mVertices.clear();
-  mIndices.clear();
-  mRanges.clear();
   for (size_t i = 0; i < wood.positions.size(); ++i)
     mVertices.push_back({wood.positions[i], wood.normals[i], wood.uvs[i]});
   // Triangles sorted by material so each material is one range.
@@ -54,14 +54,22 @@ void WoodRenderer::bake(const Tree& tree) {
   std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
     return wood.materialIds[a] < wood.materialIds[b];
   });
+  std::vector<uint32_t> indices;
+  std::vector<WoodRange> ranges;
   for (uint32_t t : order) {
     const uint32_t material = wood.materialIds[t];
-    if (mRanges.empty() || mRanges.back().material != material) {
-      mRanges.push_back({static_cast<uint32_t>(mIndices.size()), 0, material});
+    if (ranges.empty() || ranges.back().material != material) {
+      ranges.push_back({static_cast<uint32_t>(indices.size()), 0, material});
     }
-    for (int k = 0; k < 3; ++k) mIndices.push_back(wood.indices[t * 3 + k]);
-    mRanges.back().count += 3;
+    for (int k = 0; k < 3; ++k) indices.push_back(wood.indices[t * 3 + k]);
+    ranges.back().count += 3;
   }
+  mBounds = tree.bounds;
+  // Error bounds from a thousandth of the tree's radius (sub-pixel at the closest views) to a
+  // quarter of it (trees a few pixels tall).
+  const float radius = 0.5f * glm::length(mBounds.extent());
+  mLevels = buildWoodLevels(wood.positions, indices, ranges, levels ? 1e-3f * radius : 0.0f,
+                            0.25f * radius);
   mMaterials = tree.woodMaterials;
   mTextures = tree.woodTextures;
 }
@@ -70,8 +78,8 @@ void WoodRenderer::upload(gl::Device& device, bool mipmaps) {
   using gl::MemoryCategory;
   mVbo =
       device.createBuffer(MemoryCategory::kGeometry, GL_ARRAY_BUFFER, mVertices, "wood vertices");
-  mIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mIndices,
-                             "wood indices");
+  mIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mLevels.indices,
+                             mLevels.levels() > 1 ? "wood indices, every level" : "wood indices");
   mVao = makeMeshVertexArray(mVbo, mIbo);
   mGpuTextures.clear();
   for (const ImageRgba8& image : mTextures) {
@@ -84,19 +92,16 @@ void WoodRenderer::upload(gl::Device& device, bool mipmaps) {
   }
   mProgram = device.createProgram({gl::embeddedShader("methods/common/mesh.vert"),
                                    gl::embeddedShader("methods/common/wood.frag")});
+  mLod.attach(device, device.owner() + "/wood frame");
 }
 
-void WoodRenderer::draw(const FrameContext& frame, size_t instances) const {
-  const auto count = static_cast<GLsizei>(instances);
-  if (count == 0 || mRanges.empty()) return;
+void WoodRenderer::drawLevel(size_t level, GLuint instanceBuffer, GLint first,
+                             GLsizei count) const {
   const gl::Api& g = gl::api();
-  mProgram.use();
-  setFrameUniforms(mProgram, frame);
-  mProgram.set("uWoodTexture", 0);
-  g.ActiveTexture(GL_TEXTURE0);
-  g.BindVertexArray(mVao.id());
-  bindInstanceMatrices(frame.instanceBuffer, 4);
-  for (const Range& range : mRanges) {
+  bindInstanceMatrices(instanceBuffer, 4, first);
+  const size_t begin = mLevels.firstRange(level);
+  for (size_t r = begin; r < begin + mLevels.rangesPerLevel[level]; ++r) {
+    const WoodRange& range = mLevels.ranges[r];
     const WoodMaterial& material = mMaterials[range.material];
     mProgram.set("uBaseColor",
                  glm::vec3(srgbToLinear(material.baseColor.r), srgbToLinear(material.baseColor.g),
@@ -106,7 +111,52 @@ void WoodRenderer::draw(const FrameContext& frame, size_t instances) const {
     g.DrawElementsInstanced(GL_TRIANGLES, static_cast<GLsizei>(range.count), GL_UNSIGNED_INT,
                             reinterpret_cast<const void*>(sizeof(uint32_t) * range.first), count);
   }
+}
+
+void WoodRenderer::draw(const FrameContext& frame, std::span<const Instance> instances,
+                        float errorPixels) {
+  mLodUsed = false;
+  if (instances.empty() || mLevels.ranges.empty()) return;
+  const gl::Api& g = gl::api();
+  mProgram.use();
+  setFrameUniforms(mProgram, frame);
+  mProgram.set("uWoodTexture", 0);
+  g.ActiveTexture(GL_TEXTURE0);
+  g.BindVertexArray(mVao.id());
+  const std::vector<float> thresholds =
+      mLevels.thresholds(0.5f * glm::length(mBounds.extent()), errorPixels);
+  if (thresholds.empty()) {
+    drawLevel(0, frame.instanceBuffer, 0, static_cast<GLsizei>(instances.size()));
+  } else {
+    // One instanced draw per level and material: the instances sorted by level in one buffer.
+    mLod.update(frame, instances, mBounds, thresholds);
+    mLodUsed = true;
+    const std::vector<LodInstances::Range>& levels = mLod.ranges();
+    for (size_t level = 0; level < levels.size(); ++level) {
+      if (levels[level].count > 0)
+        drawLevel(level, mLod.buffer(), levels[level].first, levels[level].count);
+    }
+  }
   g.BindVertexArray(0);
+}
+
+std::vector<uint64_t> WoodRenderer::instancesPerLevel() const {
+  std::vector<uint64_t> counts;
+  if (!mLodUsed) return counts;
+  for (const LodInstances::Range& range : mLod.ranges()) counts.push_back(uint64_t(range.count));
+  return counts;
+}
+
+nlohmann::json WoodRenderer::describeLevels() const {
+  nlohmann::json levels = nlohmann::json::array();
+  for (size_t level = 0; level < mLevels.levels(); ++level)
+    levels.push_back({{"triangles", mLevels.triangles[level]}, {"error", mLevels.errors[level]}});
+  return levels;
+}
+
+nlohmann::json WoodRenderer::withLevels(nlohmann::json report) const {
+  report["wood_levels"] = describeLevels();
+  return report;
 }
 
 namespace {
@@ -124,14 +174,32 @@ struct WoodMaterialFields {
   }
 };
 
+// One level of detail: how many of wood_ranges.bin it takes, its triangles and error bound.
+struct WoodLevelFields {
+  uint32_t ranges = 0;
+  uint32_t triangles = 0;
+  float error = 0.0f;
+  template <class V>
+  void visit(V& v) {
+    v("ranges", ranges);
+    v("triangles", triangles);
+    v("error", error);
+  }
+};
+
 struct WoodFields {
   struct Wood {
     std::vector<WoodMaterialFields> materials;
     size_t textures = 0;
+    std::vector<WoodLevelFields> levels;
+    std::array<float, 3> boundsMin{}, boundsMax{};
     template <class V>
     void visit(V& v) {
       v("materials", materials);
       v("textures", textures);
+      v("levels", levels);
+      v("bounds_min", boundsMin);
+      v("bounds_max", boundsMax);
     }
   } wood;
   template <class V>
@@ -144,9 +212,15 @@ struct WoodFields {
 
 void WoodRenderer::save(AssetFolder& asset) const {
   asset.writeBlob("wood_vertices.bin", mVertices);
-  asset.writeBlob("wood_indices.bin", mIndices);
-  asset.writeBlob("wood_ranges.bin", mRanges);
+  asset.writeBlob("wood_indices.bin", mLevels.indices);
+  asset.writeBlob("wood_ranges.bin", mLevels.ranges);
   WoodFields fields;
+  for (size_t level = 0; level < mLevels.levels(); ++level) {
+    fields.wood.levels.push_back(
+        {mLevels.rangesPerLevel[level], mLevels.triangles[level], mLevels.errors[level]});
+  }
+  fields.wood.boundsMin = {mBounds.min.x, mBounds.min.y, mBounds.min.z};
+  fields.wood.boundsMax = {mBounds.max.x, mBounds.max.y, mBounds.max.z};
   for (const WoodMaterial& m : mMaterials) {
     fields.wood.materials.push_back(
         {m.name, {m.baseColor.r, m.baseColor.g, m.baseColor.b, m.baseColor.a}, m.texture});
@@ -159,22 +233,31 @@ void WoodRenderer::save(AssetFolder& asset) const {
 void WoodRenderer::load(AssetFolder& asset) {
   const std::string folder = asset.folder().string();
   mVertices = asset.readBlobAs<MeshVertex>("wood_vertices.bin");
-  mIndices = asset.readBlobAs<uint32_t>("wood_indices.bin");
-  mRanges = asset.readBlobAs<Range>("wood_ranges.bin");
+  mLevels = {};
+  mLevels.indices = asset.readBlobAs<uint32_t>("wood_indices.bin");
+  mLevels.ranges = asset.readBlobAs<WoodRange>("wood_ranges.bin");
   WoodFields fields;
   asset.readFields(fields);
+  for (const WoodLevelFields& level : fields.wood.levels) {
+    mLevels.rangesPerLevel.push_back(level.ranges);
+    mLevels.triangles.push_back(level.triangles);
+    mLevels.errors.push_back(level.error);
+  }
+  const auto& lo = fields.wood.boundsMin;
+  const auto& hi = fields.wood.boundsMax;
+  mBounds = {glm::vec3(lo[0], lo[1], lo[2]), glm::vec3(hi[0], hi[1], hi[2])};
+  if (mLevels.levels() == 0 || !mLevels.consistent() || mBounds.empty())
+    throwInputError("{}: corrupt wood levels", folder);
   mMaterials.clear();
   for (const WoodMaterialFields& m : fields.wood.materials) {
     const auto& c = m.baseColor;
     mMaterials.push_back({m.name, glm::vec4(c[0], c[1], c[2], c[3]), m.texture});
   }
   mTextures = asset.readImages("wood_{}.png", fields.wood.textures);
-  for (const Range& r : mRanges) {
-    if (size_t(r.first) + r.count > mIndices.size() || r.material >= mMaterials.size()) {
-      throwInputError("{}: corrupt wood ranges", folder);
-    }
+  for (const WoodRange& r : mLevels.ranges) {
+    if (r.material >= mMaterials.size()) throwInputError("{}: corrupt wood ranges", folder);
   }
-  for (uint32_t i : mIndices) {
+  for (uint32_t i : mLevels.indices) {
     if (i >= mVertices.size()) throwInputError("{}: corrupt wood indices", folder);
   }
   for (const WoodMaterial& m : mMaterials) {

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <span>
 #include <string>
 #include <vector>
 
@@ -8,6 +9,8 @@
 
 #include "common/gl/device.h"
 #include "common/tree.h"
+#include "methods/common/lod_instances.h"
+#include "methods/common/wood_levels.h"
 #include "methods/method.h"
 
 namespace canopy {
@@ -25,34 +28,59 @@ gl::VertexArray makeMeshVertexArray(const gl::Buffer& vertices, const gl::Buffer
 // Uniforms every shading-aware program takes: view-projection, lit flag, light, ambient.
 void setFrameUniforms(const gl::Program& program, const FrameContext& frame);
 
+// The wood parameters every impostor shares; the reference (polygonal) always draws the full mesh.
+struct WoodParams {
+  bool draw = true;
+  float errorPixels = 0.1f;
+
+  template <class Visitor>
+  void visit(Visitor& v) {
+    v("wood", draw, "draw the trunk and branches as geometry");
+    v("wood_error_px", errorPixels, 0.0f, 100.0f,
+      "wood levels of detail: the largest deviation of the simplified trunk and branches, in "
+      "output pixels (0: the full mesh always)");
+  }
+  bool levels() const { return draw && errorPixels > 0.0f; }  // whether the bake simplifies
+};
+
 // The trunk and branches, drawn the same way by the reference and every impostor (the papers
-// replace foliage only): triangles grouped by material, base colour × optional texture.
+// replace foliage only): triangles grouped by material, base colour × optional texture. With
+// levels (bake's `levels`), each instance draws the coarsest simplified mesh whose error spans at
+// most the draw's `errorPixels` output pixels at the instance's distance, so far trees cost a few
+// hundred triangles and branches thinner than that vanish.
 class WoodRenderer {
  public:
-  void bake(const Tree& tree);
+  void bake(const Tree& tree, bool levels);
   void upload(gl::Device& device, bool mipmaps);
-  // Draws the frame's `instances` instances (frame.instanceBuffer: every method draws the
-  // trunk of every tree).
-  void draw(const FrameContext& frame, size_t instances) const;
+  // Draws `instances` (also in frame.instanceBuffer, in span order).
+  void draw(const FrameContext& frame, std::span<const Instance> instances,
+            float errorPixels = 0.0f);
   void save(AssetFolder& asset) const;  // blobs and images prefixed "wood_", header key "wood"
   void load(AssetFolder& asset);
-  size_t triangleCount() const { return mIndices.size() / 3; }
+  size_t triangleCount() const { return mLevels.triangles.empty() ? 0 : mLevels.triangles[0]; }
+  // The levels for bake reports: triangles and error bound (world units) of each.
+  nlohmann::json describeLevels() const;
+  // `report` with "wood_levels" (describeLevels) added: every impostor's bake report has it.
+  nlohmann::json withLevels(nlohmann::json report) const;
+  // Like Method::lodSignature / instancesPerLevel for the last draw's wood (empty without levels).
+  uint64_t lodSignature() const { return mLodUsed ? mLod.signature() : 0; }
+  std::vector<uint64_t> instancesPerLevel() const;
 
  private:
-  struct Range {
-    uint32_t first = 0;
-    uint32_t count = 0;
-    uint32_t material = 0;
-  };
+  // Level `level`'s ranges for `count` instances from `first` in `instanceBuffer`.
+  void drawLevel(size_t level, GLuint instanceBuffer, GLint first, GLsizei count) const;
+
   std::vector<MeshVertex> mVertices;
-  std::vector<uint32_t> mIndices;
-  std::vector<Range> mRanges;
+  WoodLevels mLevels;
+  Aabb mBounds;  // the tree's: the LoD radius, as the leaves' LoD measures it
   std::vector<WoodMaterial> mMaterials;
   std::vector<ImageRgba8> mTextures;
   gl::Buffer mVbo, mIbo;
   gl::VertexArray mVao;
   std::vector<gl::Texture> mGpuTextures;
   gl::Program mProgram;
+  LodInstances mLod;
+  bool mLodUsed = false;  // the last draw sorted instances into levels
 };
 
 }  // namespace canopy

@@ -31,7 +31,7 @@ struct MultilayerParams {
   int aoRays = 32;
   std::string compression = "none";
   std::string listsPrecision = "float16";
-  bool drawWood = true;
+  WoodParams wood;
 
   template <class Visitor>
   void visit(Visitor& v) {
@@ -54,7 +54,7 @@ struct MultilayerParams {
     v("lists_precision", listsPrecision, {"float16", "8bit"},
       "Lists Texture entries: RGBA16F positions, or RGBA8 cell-relative positions and sizes "
       "with 4-bit AO (half the memory; the paper's Table 1 budgets)");
-    v("wood", drawWood, "draw the trunk and branches as geometry");
+    wood.visit(v);
   }
 };
 
@@ -99,7 +99,7 @@ class MultilayerIndirect final : public Method {
   void bake(const Tree& tree, BakeContext& ctx) override {
     mLevels = {};
     mLevels.treeBounds = tree.bounds;
-    mWood.bake(tree);
+    mWood.bake(tree, mParams.wood.levels());
     const uint32_t imageCount = orientedImageCount(tree.leafTextures.size(), mParams.bins);
     if (imageCount > 2048) {
       throwInputError(
@@ -284,7 +284,7 @@ class MultilayerIndirect final : public Method {
         device.createProgram({gl::embeddedShader("methods/common/mesh.vert"),
                               gl::embeddedShader("methods/common/alpha_tested_texture.frag")});
     mLod.attach(device, device.owner() + "/frame");
-    if (mParams.drawWood) mWood.upload(device, true);
+    if (mParams.wood.draw) mWood.upload(device, true);
   }
 
   void draw(const FrameContext& frame, std::span<const Instance> instances) override {
@@ -312,12 +312,15 @@ class MultilayerIndirect final : public Method {
     });
     g.ActiveTexture(GL_TEXTURE0);
     g.BindVertexArray(0);
-    if (mParams.drawWood) mWood.draw(frame, instances.size());
+    if (mParams.wood.draw) mWood.draw(frame, instances, mParams.wood.errorPixels);
   }
 
-  uint64_t lodSignature() const override { return mLod.signature(); }
+  uint64_t lodSignature() const override {
+    return fnv1aMix(mLod.signature(), mWood.lodSignature());
+  }
+  std::vector<uint64_t> woodInstancesPerLevel() const override { return mWood.instancesPerLevel(); }
   nlohmann::json effectiveParams() const override { return writeParams(mParams); }
-  nlohmann::json bakeReport() const override { return mReport; }
+  nlohmann::json bakeReport() const override { return mWood.withLevels(mReport); }
 
   void save(AssetFolder& asset) const override {
     asset.describe("multilayer_indirect", effectiveParams(), mReport);

@@ -51,7 +51,7 @@ class Polygonal final : public Method {
   explicit Polygonal(PolygonalParams params) : mParams(params) {}
 
   void bake(const Tree& tree, BakeContext& ctx) override {
-    mWood.bake(tree);
+    mWood.bake(tree, false);  // the reference keeps the full mesh
     mVertices.clear();
     mIndices.clear();
     mRanges.clear();
@@ -141,7 +141,7 @@ class Polygonal final : public Method {
     }
     g.BindVertexArray(0);
     mLeafPolygonsDrawn = uint64_t(mIndices.size() / 6) * instances.size();
-    if (mParams.drawWood) mWood.draw(frame, instances.size());
+    if (mParams.drawWood) mWood.draw(frame, instances);
   }
 
   uint64_t leafPolygonsDrawn() const override { return mLeafPolygonsDrawn; }

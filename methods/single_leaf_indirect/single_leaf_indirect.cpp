@@ -20,7 +20,7 @@ struct SingleLeafParams {
   int maxCells = 1024;
   OrientationBins bins;
   int leafImageSize = 64;
-  bool drawWood = true;
+  WoodParams wood;
 
   template <class Visitor>
   void visit(Visitor& v) {
@@ -30,7 +30,7 @@ struct SingleLeafParams {
     v("max_cells", maxCells, 1, 4096, "cap on cells per billboard side");
     bins.visit(v);
     v("leaf_image_size", leafImageSize, 4, 512, "texels per side of each oriented leaf image");
-    v("wood", drawWood, "draw the trunk and branches as geometry");
+    wood.visit(v);
   }
 };
 
@@ -61,7 +61,7 @@ class SingleLeafIndirect final : public Method {
   void bake(const Tree& tree, BakeContext& ctx) override {
     mLevels = {};
     mLevels.treeBounds = tree.bounds;
-    mWood.bake(tree);
+    mWood.bake(tree, mParams.wood.levels());
     if (orientedImageCount(tree.leafTextures.size(), mParams.bins) >= 65535) {
       throwInputError(
           "single_leaf_indirect: rotations × tilts × 2 × leaf textures must stay below 65535");
@@ -160,7 +160,7 @@ class SingleLeafIndirect final : public Method {
         {gl::embeddedShader("methods/single_leaf_indirect/single_leaf_indirect.vert"),
          gl::embeddedShader("methods/single_leaf_indirect/single_leaf_indirect.frag")});
     mLod.attach(device, device.owner() + "/frame");
-    if (mParams.drawWood) mWood.upload(device, true);
+    if (mParams.wood.draw) mWood.upload(device, true);
   }
 
   void draw(const FrameContext& frame, std::span<const Instance> instances) override {
@@ -179,12 +179,15 @@ class SingleLeafIndirect final : public Method {
     g.BindVertexArray(mVao.id());
     mLevels.draw(mLod, {});
     g.BindVertexArray(0);
-    if (mParams.drawWood) mWood.draw(frame, instances.size());
+    if (mParams.wood.draw) mWood.draw(frame, instances, mParams.wood.errorPixels);
   }
 
-  uint64_t lodSignature() const override { return mLod.signature(); }
+  uint64_t lodSignature() const override {
+    return fnv1aMix(mLod.signature(), mWood.lodSignature());
+  }
+  std::vector<uint64_t> woodInstancesPerLevel() const override { return mWood.instancesPerLevel(); }
   nlohmann::json effectiveParams() const override { return writeParams(mParams); }
-  nlohmann::json bakeReport() const override { return mReport; }
+  nlohmann::json bakeReport() const override { return mWood.withLevels(mReport); }
 
   void save(AssetFolder& asset) const override {
     asset.describe("single_leaf_indirect", effectiveParams(), mReport);

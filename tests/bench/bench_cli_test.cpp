@@ -434,8 +434,10 @@ TEST(BenchCli, BudgetSetsTheMemoryKnobAndPoppingRecordsEveryFrame) {
                 {"method": "bbox_hierarchy", "params": {"min_box_leaves": 150}}],
     "views": {"resolution": [64, 64], "distances": [2, 6], "elevations": [0], "azimuths": 2},
     "forests": {"sizes": [1], "frames": 2, "warmup": 1},
-    "budget": {"memory_mb": 3.0},
+    "budget": {"memory_mb": 3.2},
     "popping": {"frames": 12, "near": 1.5, "far": 40, "resolution": [64, 64]}})");
+  // 3.2 MB: the atlas grows in steps (2.63 MB at texture_size 160, 3.16 at 162–168, 3.22 at 176),
+  // so a budget must lie within 5 % of a step to be reachable.
   const std::string command = kBench + " --quiet --no-images --config " +
                               (dir / "budget.json").string() + " --out " + (dir / "out").string();
   ASSERT_EQ(test::runCommand(command), 0);
@@ -447,7 +449,7 @@ TEST(BenchCli, BudgetSetsTheMemoryKnobAndPoppingRecordsEveryFrame) {
       EXPECT_EQ(budget.at("parameter"), "texture_size");
       EXPECT_TRUE(budget.at("reached").get<bool>());
       const double memory = record.at("memory_bytes").at("total").get<double>() / 1e6;
-      EXPECT_NEAR(memory, 3.0, 0.15) << "within 5 % of the budget";
+      EXPECT_NEAR(memory, 3.2, 0.16) << "within 5 % of the budget";
       EXPECT_EQ(record.at("params").at("texture_size"), budget.at("value"));
     }
     if (kind == "bake" && record.at("method") == "polygonal") {

@@ -1,0 +1,129 @@
+#include "methods/common/wood_levels.h"
+
+#include <algorithm>
+#include <numeric>
+
+#include <meshoptimizer.h>
+
+namespace canopy {
+
+size_t WoodLevels::firstRange(size_t level) const {
+  return std::accumulate(rangesPerLevel.begin(), rangesPerLevel.begin() + long(level), size_t(0));
+}
+
+std::vector<float> WoodLevels::thresholds(float treeRadius, float errorPixels) const {
+  std::vector<float> result;
+  if (errorPixels <= 0.0f) return result;  // the full mesh always
+  for (size_t level = 1; level < levels(); ++level)
+    result.push_back(errorPixels * treeRadius / std::max(errors[level], 1e-12f));
+  return result;
+}
+
+bool WoodLevels::consistent() const {
+  if (errors.size() != levels() || triangles.size() != levels()) return false;
+  if (firstRange(levels()) != ranges.size()) return false;
+  for (const WoodRange& range : ranges) {
+    if (size_t(range.first) + range.count > indices.size() || range.count % 3 != 0) return false;
+  }
+  for (size_t level = 0, r = 0; level < levels(); ++level) {
+    uint64_t count = 0;
+    for (uint32_t k = 0; k < rangesPerLevel[level]; ++k) count += ranges[r++].count;
+    if (count != 3ull * triangles[level]) return false;
+  }
+  for (size_t level = 1; level < levels(); ++level) {
+    if (!(errors[level] >= errors[level - 1])) return false;
+  }
+  return true;
+}
+
+namespace {
+
+// One material range simplified within `relativeError` (meshoptimizer's error relative to the
+// mesh scale) into `out`, returning its index count. The edge-collapse simplifier keeps the
+// topology, so a wood of many separate tubes stalls at a few triangles per tube; where the
+// vertex-clustering ("sloppy") simplifier, which may merge and remove parts, gets fewer triangles
+// within the same bound, its result is taken.
+size_t simplifyRange(std::vector<uint32_t>& out, const std::vector<glm::vec3>& positions,
+                     const uint32_t* indices, uint32_t count, float relativeError) {
+  out.resize(count);
+  const float* xyz = &positions[0].x;
+  // Target 0 triangles: collapse until the next collapse would exceed the error bound.
+  size_t kept = meshopt_simplify(out.data(), indices, count, xyz, positions.size(),
+                                 sizeof(glm::vec3), 0, relativeError);
+  std::vector<uint32_t> sloppy(count);
+  // Ever smaller targets, a sixth fewer triangles each: the clustering's error does not grow
+  // monotonically with the reduction, so every target is tried and the fewest triangles within
+  // the bound win.
+  for (size_t target = kept / 18 * 15; target >= 3; target = target / 18 * 15) {
+    float error = 0.0f;
+    // Its own error limit stops it far short of what it reaches within the bound (2,409 instead
+    // of 880 triangles on broadleaf at 2.5 %), so the target alone drives it and the bound is
+    // checked on the result.
+    const size_t got = meshopt_simplifySloppy(sloppy.data(), indices, count, xyz, positions.size(),
+                                              sizeof(glm::vec3), target, 1.0f, &error);
+    if (got >= kept || error > relativeError) continue;
+    std::copy(sloppy.begin(), sloppy.begin() + long(got), out.begin());
+    kept = got;
+  }
+  return kept;
+}
+
+// Appends one level: each material range of the full mesh simplified within `relativeError`.
+void appendSimplified(WoodLevels& levels, const std::vector<glm::vec3>& positions,
+                      const std::vector<uint32_t>& indices, const std::vector<WoodRange>& ranges,
+                      float relativeError) {
+  uint32_t triangles = 0, kept = 0;
+  std::vector<uint32_t> simplified;
+  for (const WoodRange& range : ranges) {
+    const size_t count = simplifyRange(simplified, positions, indices.data() + range.first,
+                                       range.count, relativeError);
+    if (count == 0) continue;  // the whole material vanished within the error
+    levels.ranges.push_back({uint32_t(levels.indices.size()), uint32_t(count), range.material});
+    levels.indices.insert(levels.indices.end(), simplified.begin(),
+                          simplified.begin() + long(count));
+    triangles += uint32_t(count / 3);
+    ++kept;
+  }
+  levels.rangesPerLevel.push_back(kept);
+  levels.triangles.push_back(triangles);
+}
+
+// Removes the last level appended (one that did not pay).
+void dropLastLevel(WoodLevels& levels) {
+  const size_t first = levels.firstRange(levels.levels() - 1);
+  levels.indices.resize(first < levels.ranges.size() ? levels.ranges[first].first
+                                                     : levels.indices.size());
+  levels.ranges.resize(first);
+  levels.rangesPerLevel.pop_back();
+  levels.triangles.pop_back();
+}
+
+}  // namespace
+
+WoodLevels buildWoodLevels(const std::vector<glm::vec3>& positions,
+                           const std::vector<uint32_t>& indices,
+                           const std::vector<WoodRange>& ranges, float finestError,
+                           float coarsestError) {
+  WoodLevels levels;
+  levels.indices = indices;
+  levels.ranges = ranges;
+  levels.rangesPerLevel = {uint32_t(ranges.size())};
+  levels.errors = {0.0f};
+  levels.triangles = {uint32_t(indices.size() / 3)};
+  if (positions.empty() || indices.empty() || finestError <= 0.0f) return levels;
+  const float scale = meshopt_simplifyScale(&positions[0].x, positions.size(), sizeof(glm::vec3));
+  if (!(scale > 0.0f)) return levels;
+  for (float bound = finestError; bound <= coarsestError * 1.0001f; bound *= 2.0f) {
+    const uint32_t previous = levels.triangles.back();
+    if (previous == 0) break;
+    appendSimplified(levels, positions, indices, ranges, bound / scale);
+    if (uint64_t(levels.triangles.back()) * 6 > uint64_t(previous) * 5) {
+      dropLastLevel(levels);
+      continue;
+    }
+    levels.errors.push_back(bound);  // the bound meshoptimizer kept every collapse within
+  }
+  return levels;
+}
+
+}  // namespace canopy

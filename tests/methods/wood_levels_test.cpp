@@ -1,0 +1,213 @@
+// The wood's levels of detail (methods/common/wood_levels): simplified by meshoptimizer within
+// doubling error bounds, thin branches vanish before the trunk does, and the LoD thresholds
+// keep every instance's wood error within the requested output pixels.
+#include <gtest/gtest.h>
+
+#include <glm/gtc/constants.hpp>
+
+#include "methods/common/lod_instances.h"
+#include "methods/common/wood_levels.h"
+
+namespace canopy {
+namespace {
+
+// A closed tube along y: `sides` around, `rings` along, capped, appended to the mesh.
+void addTube(std::vector<glm::vec3>& positions, std::vector<uint32_t>& indices, glm::vec3 base,
+             float radius, float height, int sides, int rings) {
+  const auto first = uint32_t(positions.size());
+  for (int r = 0; r <= rings; ++r) {
+    for (int s = 0; s < sides; ++s) {
+      const float a = glm::two_pi<float>() * float(s) / float(sides);
+      positions.push_back(base + glm::vec3(radius * std::cos(a), height * float(r) / float(rings),
+                                           radius * std::sin(a)));
+    }
+  }
+  for (int r = 0; r < rings; ++r) {
+    for (int s = 0; s < sides; ++s) {
+      const uint32_t a = first + uint32_t(r * sides + s),
+                     b = first + uint32_t(r * sides + (s + 1) % sides);
+      const uint32_t c = a + uint32_t(sides), d = b + uint32_t(sides);
+      indices.insert(indices.end(), {a, c, b, b, c, d});
+    }
+  }
+  for (int end = 0; end <= 1; ++end) {  // fans closing both ends
+    const auto centre = uint32_t(positions.size());
+    positions.push_back(base + glm::vec3(0.0f, end ? height : 0.0f, 0.0f));
+    const uint32_t ring = first + uint32_t(end ? rings * sides : 0);
+    for (int s = 0; s < sides; ++s) {
+      const uint32_t a = ring + uint32_t(s), b = ring + uint32_t((s + 1) % sides);
+      if (end)
+        indices.insert(indices.end(), {centre, b, a});
+      else
+        indices.insert(indices.end(), {centre, a, b});
+    }
+  }
+}
+
+struct TwoTubes {
+  std::vector<glm::vec3> positions;
+  std::vector<uint32_t> indices;
+  uint32_t trunkVertices = 0;  // vertices below this index belong to the trunk
+};
+
+// A trunk of radius 0.1 and a twig of radius 0.004 beside it, each one material.
+TwoTubes trunkAndTwig() {
+  TwoTubes mesh;
+  addTube(mesh.positions, mesh.indices, {0, 0, 0}, 0.1f, 2.0f, 24, 40);
+  mesh.trunkVertices = uint32_t(mesh.positions.size());
+  addTube(mesh.positions, mesh.indices, {0.5f, 0.5f, 0}, 0.004f, 1.0f, 8, 30);
+  return mesh;
+}
+
+// Triangles of `level` with a corner at or above vertex `firstVertex` / below it.
+std::pair<size_t, size_t> trianglesOf(const WoodLevels& levels, size_t level,
+                                      uint32_t firstVertex) {
+  size_t below = 0, above = 0;
+  const size_t begin = levels.firstRange(level);
+  for (size_t r = begin; r < begin + levels.rangesPerLevel[level]; ++r) {
+    const WoodRange& range = levels.ranges[r];
+    for (uint32_t i = range.first; i < range.first + range.count; i += 3)
+      (levels.indices[i] >= firstVertex ? above : below) += 1;
+  }
+  return {below, above};
+}
+
+TEST(WoodLevels, FewerTrianglesPerLevelWithinDoublingBounds) {
+  const TwoTubes mesh = trunkAndTwig();
+  const std::vector<WoodRange> ranges = {{0, uint32_t(mesh.indices.size()), 0}};
+  const WoodLevels levels = buildWoodLevels(mesh.positions, mesh.indices, ranges, 0.001f, 0.5f);
+  ASSERT_TRUE(levels.consistent());
+  ASSERT_GE(levels.levels(), 3u);
+  EXPECT_EQ(levels.triangles[0], mesh.indices.size() / 3) << "level 0 is the full mesh";
+  EXPECT_EQ(levels.errors[0], 0.0f);
+  for (size_t l = 1; l < levels.levels(); ++l) {
+    // Each kept level removes at least a sixth of the one before (the rest are skipped).
+    EXPECT_LE(uint64_t(levels.triangles[l]) * 6, uint64_t(levels.triangles[l - 1]) * 5) << l;
+    EXPECT_GT(levels.errors[l], levels.errors[l - 1]);
+    EXPECT_LE(levels.errors[l], 0.5f * 1.0001f);
+    // Every simplified vertex is a vertex of the full mesh (edge collapse never invents one).
+    for (uint32_t i : std::span(levels.indices).subspan(levels.ranges[levels.firstRange(l)].first))
+      EXPECT_LT(i, mesh.positions.size());
+  }
+}
+
+TEST(WoodLevels, ThinBranchesVanishBeforeTheTrunk) {
+  const TwoTubes mesh = trunkAndTwig();
+  const std::vector<WoodRange> ranges = {{0, uint32_t(mesh.indices.size()), 0}};
+  const WoodLevels levels = buildWoodLevels(mesh.positions, mesh.indices, ranges, 0.001f, 0.5f);
+  bool twigGone = false;
+  for (size_t l = 0; l < levels.levels(); ++l) {
+    const auto [trunk, twig] = trianglesOf(levels, l, mesh.trunkVertices);
+    // Within a bound below half the trunk's radius the trunk keeps a body.
+    if (levels.errors[l] < 0.05f) {
+      EXPECT_GE(trunk, 8u) << "level " << l;
+    }
+    // A bound several times the twig's radius (0.004) lets it collapse away.
+    if (levels.errors[l] >= 0.032f) {
+      EXPECT_EQ(twig, 0u) << "level " << l;
+    }
+    if (levels.errors[l] <= 0.002f) {
+      EXPECT_GT(twig, 0u) << "level " << l;
+    }
+    twigGone = twigGone || twig == 0;
+  }
+  EXPECT_TRUE(twigGone);
+}
+
+TEST(WoodLevels, ThresholdsKeepTheErrorWithinThePixels) {
+  const TwoTubes mesh = trunkAndTwig();
+  const std::vector<WoodRange> ranges = {{0, uint32_t(mesh.indices.size()), 0}};
+  const WoodLevels levels = buildWoodLevels(mesh.positions, mesh.indices, ranges, 0.001f, 0.5f);
+  const float treeRadius = 1.2f, errorPixels = 0.75f;
+  const std::vector<float> thresholds = levels.thresholds(treeRadius, errorPixels);
+  ASSERT_EQ(thresholds.size(), levels.levels() - 1);
+  for (float radiusPixels = 0.5f; radiusPixels < 5000.0f; radiusPixels *= 1.17f) {
+    const int level = LodInstances::levelFor(radiusPixels, thresholds);
+    ASSERT_LT(size_t(level), levels.levels());
+    // The chosen level's error, in output pixels, is within the bound ...
+    EXPECT_LE(levels.errors[size_t(level)] * radiusPixels / treeRadius, errorPixels * 1.0001f)
+        << radiusPixels;
+    // ... and the next coarser one would exceed it.
+    if (size_t(level) + 1 < levels.levels()) {
+      EXPECT_GT(levels.errors[size_t(level) + 1] * radiusPixels / treeRadius, errorPixels)
+          << radiusPixels;
+    }
+  }
+  EXPECT_TRUE(levels.thresholds(treeRadius, 0.0f).empty()) << "0 px: the full mesh always";
+}
+
+TEST(WoodLevels, MaterialsStaySeparateAndNoBoundMeansOneLevel) {
+  TwoTubes mesh = trunkAndTwig();
+  const auto split = uint32_t(mesh.indices.size() / 2 / 3 * 3);
+  const std::vector<WoodRange> ranges = {{0, split, 0},
+                                         {split, uint32_t(mesh.indices.size()) - split, 1}};
+  const WoodLevels levels = buildWoodLevels(mesh.positions, mesh.indices, ranges, 0.001f, 0.5f);
+  ASSERT_TRUE(levels.consistent());
+  for (size_t l = 0; l < levels.levels(); ++l) {
+    const size_t begin = levels.firstRange(l);
+    for (size_t r = begin + 1; r < begin + levels.rangesPerLevel[l]; ++r)
+      EXPECT_LT(levels.ranges[r - 1].material, levels.ranges[r].material) << "one range each";
+  }
+  const WoodLevels single = buildWoodLevels(mesh.positions, mesh.indices, ranges, 0.0f, 0.5f);
+  EXPECT_EQ(single.levels(), 1u);
+  EXPECT_EQ(single.indices, mesh.indices);
+  WoodLevels corrupt = levels;
+  corrupt.ranges.back().count += 3;
+  EXPECT_FALSE(corrupt.consistent());
+  corrupt = levels;
+  corrupt.errors.back() = std::nanf("");
+  EXPECT_FALSE(corrupt.consistent());
+}
+
+}  // namespace
+}  // namespace canopy
+
+#include "bench/harness.h"
+#include "methods/method.h"
+#include "test_support.h"
+
+namespace canopy {
+namespace {
+
+// The wood levels inside an impostor: a far tree draws far fewer wood triangles than with the
+// full mesh, and at a bound below a pixel a near view is the full mesh's, pixel for pixel.
+TEST(WoodLevelsDrawn, FarTreesDrawCoarseWoodAndNearViewsTheFullMesh) {
+  auto context = test::makeTestContext();
+  gl::Ledger ledger;
+  gl::Device device(ledger);
+  const Tree tree = test::smallTree(400, 3);
+  RenderSettings settings;
+  settings.width = settings.height = 128;
+  Harness harness(device, settings);
+  harness.setTree(tree.bounds, tree.leaves.size());
+  auto full = test::bakeAndUpload(device, tree, "billboard_cloud", {{"wood_error_px", 0.0}});
+  auto coarse = test::bakeAndUpload(device, tree, "billboard_cloud", {{"wood_error_px", 1.0}},
+                                    Shading::kUnlit, "coarse");
+  const nlohmann::json levels = coarse->bakeReport().at("wood_levels");
+  ASSERT_GE(levels.size(), 3u);
+  EXPECT_EQ(full->bakeReport().at("wood_levels").size(), 1u);
+  const auto draw = [&](Method& method, float distance) {
+    DrawnStats drawn;
+    const Camera camera = orbitCamera(tree.bounds, {distance, 10.0f, 0.0f}, 40.0f);
+    const ImageRgbaF image = harness.renderLinearAt(method, camera, 128, 128, &drawn);
+    return std::make_pair(drawn, image);
+  };
+  const auto [fullFar, fullFarImage] = draw(*full, 30.0f);
+  const auto [coarseFar, coarseFarImage] = draw(*coarse, 30.0f);
+  const uint64_t woodTriangles = levels[0].at("triangles").get<uint64_t>();
+  EXPECT_LT(coarseFar.counts.primitives + woodTriangles / 2, fullFar.counts.primitives)
+      << "a tree of 6 px radius drops at least half its wood";
+  ASSERT_EQ(coarseFar.woodInstancesPerLevel.size(), levels.size());
+  EXPECT_EQ(coarseFar.woodInstancesPerLevel[0], 0u);
+  // Near (1.2 radii, ~260 px of radius): a bound of 0.1 px keeps the full mesh.
+  auto fine = test::bakeAndUpload(device, tree, "billboard_cloud", {{"wood_error_px", 0.1}},
+                                  Shading::kUnlit, "fine");
+  const auto [fullNear, fullNearImage] = draw(*full, 1.2f);
+  const auto [fineNear, fineNearImage] = draw(*fine, 1.2f);
+  EXPECT_EQ(fineNear.woodInstancesPerLevel.at(0), 1u);
+  EXPECT_EQ(fineNearImage.pixels, fullNearImage.pixels);
+  EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
+}
+
+}  // namespace
+}  // namespace canopy
