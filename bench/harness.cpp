@@ -1,6 +1,7 @@
 #include "bench/harness.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -38,8 +39,9 @@ gl::RenderTarget& Harness::targetOfSize(int width, int height) {
   return mTargets.back();
 }
 
-void Harness::uploadInstances(const std::vector<Instance>& instances) {
+void Harness::uploadInstances(const std::vector<Instance>& instances, const Aabb& treeBounds) {
   if (mInstances.id() != 0 && instances.size() == mUploadedInstances.size() &&
+      treeBounds.min == mInstanceBounds.min && treeBounds.max == mInstanceBounds.max &&
       std::equal(instances.begin(), instances.end(), mUploadedInstances.begin(),
                  [](const Instance& a, const Instance& b) {
                    return a.position == b.position && a.rotation == b.rotation &&
@@ -47,13 +49,66 @@ void Harness::uploadInstances(const std::vector<Instance>& instances) {
                  })) {
     return;
   }
-  std::vector<glm::mat4> matrices;
-  matrices.reserve(instances.size());
-  for (const Instance& instance : instances) matrices.push_back(instance.modelMatrix());
+  std::vector<glm::mat4>& matrices = mInstanceMatrices;
+  matrices.clear();
+  mInstanceSpheres.clear();
+  const float radius = 0.5f * glm::length(treeBounds.extent());
+  for (const Instance& instance : instances) {
+    const glm::mat4 model = instance.modelMatrix();
+    matrices.push_back(model);
+    mInstanceSpheres.emplace_back(glm::vec3(model * glm::vec4(treeBounds.center(), 1.0f)),
+                                  radius * instance.scale);
+  }
   gl::Device::OwnerScope owner(mDevice, "harness");
   mInstances = mDevice.createBuffer(gl::MemoryCategory::kOther, GL_ARRAY_BUFFER, matrices,
                                     "instance matrices");
   mUploadedInstances = instances;
+  mInstanceBounds = treeBounds;
+}
+
+std::pair<std::span<const Instance>, GLuint> Harness::visibleInstances(
+    const glm::mat4& viewProjection, const glm::vec3& viewer) {
+  if (!mCulling) return {std::span<const Instance>(mUploadedInstances), mInstances.id()};
+  // The frustum's six planes from the rows of the view-projection (Gribb and Hartmann), each
+  // normalised so a sphere is outside when its centre lies more than its radius behind one.
+  const glm::mat4 m = glm::transpose(viewProjection);
+  std::array<glm::vec4, 6> planes = {m[3] + m[0], m[3] - m[0], m[3] + m[1],
+                                     m[3] - m[1], m[3] + m[2], m[3] - m[2]};
+  for (glm::vec4& plane : planes) plane /= std::max(glm::length(glm::vec3(plane)), 1e-20f);
+  std::vector<std::pair<float, uint32_t>> visible;  // (distance, instance)
+  for (size_t i = 0; i < mUploadedInstances.size(); ++i) {
+    const glm::vec4& sphere = mInstanceSpheres[i];
+    const bool inside = std::all_of(planes.begin(), planes.end(), [&](const glm::vec4& plane) {
+      return glm::dot(glm::vec3(plane), glm::vec3(sphere)) + plane.w >= -sphere.w;
+    });
+    if (inside) visible.emplace_back(glm::length(glm::vec3(sphere) - viewer), uint32_t(i));
+  }
+  // Nearest first, for every method alike: the depth test then rejects the fragments of trees
+  // hidden behind nearer ones before their shaders run.
+  std::stable_sort(visible.begin(), visible.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  mVisible.clear();
+  mVisibleMatrices.clear();
+  for (const auto& [distance, i] : visible) {
+    mVisible.push_back(mUploadedInstances[i]);
+    mVisibleMatrices.push_back(mInstanceMatrices[i]);
+  }
+  if (mVisibleMatrices.size() > mVisibleCapacity || !mVisibleBuffer.id()) {
+    mVisibleCapacity = std::max<size_t>(mVisibleMatrices.size(), 16);
+    gl::Device::OwnerScope owner(mDevice, "harness");
+    mVisibleBuffer = mDevice.createBuffer(gl::MemoryCategory::kOther, GL_ARRAY_BUFFER,
+                                          mVisibleCapacity * sizeof(glm::mat4), nullptr,
+                                          "visible instance matrices", GL_DYNAMIC_DRAW);
+  }
+  if (!mVisibleMatrices.empty()) {
+    const gl::Api& g = gl::api();
+    g.BindBuffer(GL_ARRAY_BUFFER, mVisibleBuffer.id());
+    g.BufferSubData(GL_ARRAY_BUFFER, 0,
+                    static_cast<GLsizeiptr>(mVisibleMatrices.size() * sizeof(glm::mat4)),
+                    mVisibleMatrices.data());
+    g.BindBuffer(GL_ARRAY_BUFFER, 0);
+  }
+  return {std::span<const Instance>(mVisible), mVisibleBuffer.id()};
 }
 
 FrameContext Harness::makeFrame(const Camera& camera, glm::ivec2 outputSize, int supersample,
@@ -158,14 +213,21 @@ void Harness::prepareShadows(Method& method, FrameContext& frame,
 void Harness::drawFrame(Method& method, const gl::RenderTarget& target, FrameContext frame,
                         const Aabb& scene, DrawnStats* drawn) {
   if (drawn) statistics().begin();
+  // Shadows are cast by every tree (the light's frustum holds the whole scene); the view draws
+  // what its frustum holds.
   prepareShadows(method, frame, std::span(mUploadedInstances), scene);
+  const auto [visible, buffer] =
+      visibleInstances(frame.projection * frame.view, frame.cameraPosition);
+  frame.instanceBuffer = buffer;
   beginFrame(target);
-  method.draw(frame, std::span(mUploadedInstances));
+  method.draw(frame, visible);
   if (drawn) {
     drawn->counts = mStatistics->end();
-    const double leaves = double(mTreeLeaves) * double(mUploadedInstances.size());
+    const double leaves = double(mTreeLeaves) * double(visible.size());
     drawn->leafGeometryFraction = leaves > 0 ? double(method.leafPolygonsDrawn()) / leaves : 0.0;
     drawn->instancesPerLevel = method.instancesPerLevel();
+    drawn->woodInstancesPerLevel = method.woodInstancesPerLevel();
+    drawn->instancesVisible = double(visible.size());
   }
 }
 
@@ -189,7 +251,7 @@ ImageRgbaF Harness::renderLinearAt(Method& method, const Camera& camera, int wid
                                    DrawnStats* drawn) {
   const int s = mSettings.supersample;
   gl::RenderTarget& target = targetOfSize(width * s, height * s);
-  uploadInstances({Instance{}});
+  uploadInstances({Instance{}}, mTreeBounds);
   drawFrame(method, target, makeFrame(camera, {width, height}, s, mInstances.id()), mTreeBounds,
             drawn);
   gl::checkError("Harness::renderLinear");
@@ -269,6 +331,12 @@ void Harness::scoreBlock(Method& method, const std::vector<Instance>& forest,
   levels.resize(std::max(levels.size(), methodDrawn.instancesPerLevel.size()), 0);
   for (size_t l = 0; l < methodDrawn.instancesPerLevel.size(); ++l)
     levels[l] += methodDrawn.instancesPerLevel[l];
+  std::vector<uint64_t>& woodLevels = result.drawn.woodInstancesPerLevel;
+  woodLevels.resize(std::max(woodLevels.size(), methodDrawn.woodInstancesPerLevel.size()), 0);
+  for (size_t l = 0; l < methodDrawn.woodInstancesPerLevel.size(); ++l)
+    woodLevels[l] += methodDrawn.woodInstancesPerLevel[l];
+  result.drawn.instancesVisible += methodDrawn.instancesVisible / blocks;
+  result.referenceDrawn.instancesVisible += referenceDrawn.instancesVisible / blocks;
   result.referenceDrawn.counts += referenceDrawn.counts;
   result.referenceDrawn.leafGeometryFraction += referenceDrawn.leafGeometryFraction / blocks;
 }
@@ -378,7 +446,7 @@ std::vector<InterleavedTimes> Harness::timeInterleaved(
   const int width = timing.width, height = timing.height;
   const size_t count = methods.size();
   gl::RenderTarget& target = targetOfSize(width, height);
-  uploadInstances(forest);
+  uploadInstances(forest, treeBounds);
   const Aabb scene = forestBounds(forest, treeBounds);
   const float fov = mSettings.fovYDegrees;
   const auto camera = [&](int frame) {
@@ -427,7 +495,7 @@ ImageRgba8 Harness::renderForestFrame(Method& method, const std::vector<Instance
                                       const Aabb& treeBounds, const Camera& camera, int width,
                                       int height, DrawnStats* drawn) {
   gl::RenderTarget& target = targetOfSize(width, height);
-  uploadInstances(forest);
+  uploadInstances(forest, treeBounds);
   drawFrame(method, target, makeFrame(camera, {width, height}, 1, mInstances.id()),
             forestBounds(forest, treeBounds), drawn);
   return display(readTarget(target));

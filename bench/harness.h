@@ -65,7 +65,9 @@ struct DrawnStats {
   gl::DrawCounts counts;  // primitives and fragments of the whole frame (and shadows)
   double leafGeometryFraction =
       0.0;  // leaf polygons drawn / (leaves × instances); 0 without leaves
-  std::vector<uint64_t> instancesPerLevel;  // Method::instancesPerLevel, summed over frames
+  std::vector<uint64_t> instancesPerLevel;      // Method::instancesPerLevel, summed over frames
+  std::vector<uint64_t> woodInstancesPerLevel;  // Method::woodInstancesPerLevel, likewise
+  double instancesVisible = 0.0;  // instances left after frustum culling (mean over frames)
 };
 
 // A forest timed along a camera path against the reference, and scored against it: the config's
@@ -189,9 +191,19 @@ class Harness {
   void prepareShadows(Method& method, FrameContext& frame, std::span<const Instance> instances,
                       const Aabb& scene);
 
+  // Per-instance frustum culling and nearest-first order of every frame (on unless a test
+  // compares against frames drawn without them).
+  void setInstanceCulling(bool enabled) { mCulling = enabled; }
+
  private:
   gl::RenderTarget& targetOfSize(int width, int height);
-  void uploadInstances(const std::vector<Instance>& instances);
+  // Makes `instances` (each a tree with bounds `treeBounds`) the ones frames draw.
+  void uploadInstances(const std::vector<Instance>& instances, const Aabb& treeBounds);
+  // The instances whose bounding sphere meets the view frustum of `viewProjection`, nearest to
+  // `viewer` first, and the buffer holding their matrices: every method, the reference
+  // included, is handed only these (culling is part of the timed frame).
+  std::pair<std::span<const Instance>, GLuint> visibleInstances(const glm::mat4& viewProjection,
+                                                                const glm::vec3& viewer);
   // Shadows (if any), then the method's draw, into `target`; counted when `drawn` is given.
   void drawFrame(Method& method, const gl::RenderTarget& target, FrameContext frame,
                  const Aabb& scene, DrawnStats* drawn);
@@ -209,6 +221,14 @@ class Harness {
   std::vector<gl::RenderTarget> mTargets;
   gl::Buffer mInstances;
   std::vector<Instance> mUploadedInstances;
+  Aabb mInstanceBounds;  // the bounds of the tree every uploaded instance is
+  std::vector<glm::mat4> mInstanceMatrices;
+  std::vector<glm::vec4> mInstanceSpheres;  // world centre and radius of each
+  std::vector<Instance> mVisible;           // the last frame's culled instances and their matrices
+  std::vector<glm::mat4> mVisibleMatrices;
+  gl::Buffer mVisibleBuffer;
+  size_t mVisibleCapacity = 0;
+  bool mCulling = true;
   Aabb mTreeBounds;
   size_t mTreeLeaves = 0;
   gl::ShadowMap mShadowMap;

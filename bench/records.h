@@ -39,12 +39,19 @@ struct DrawnRecord {
   // Instances drawn at each level of detail, finest first (forests: over the scored frames);
   // absent for methods that do not report levels and in runs made before it existed.
   Absent<std::vector<uint64_t>> instancesPerLevel;
+  // Likewise for the wood's levels (the full mesh first), for methods that simplify it.
+  Absent<std::vector<uint64_t>> woodInstancesPerLevel;
+  // Instances left after the harness's frustum culling (forests: mean over the scored frames);
+  // absent in runs made before culling existed.
+  Absent<double> instancesVisible;
   template <class V>
   void visit(V& v) {
     v("primitives", primitives);
     v("fragments", fragments);
     v("leaf_geometry_fraction", leafGeometryFraction);
     v("instances_per_level", instancesPerLevel);
+    v("wood_instances_per_level", woodInstancesPerLevel);
+    v("instances_visible", instancesVisible);
   }
 };
 

@@ -10,8 +10,11 @@ namespace canopy {
 
 DrawnRecord drawnRecord(const DrawnStats& drawn) {
   DrawnRecord record{
-      drawn.counts.primitives, drawn.counts.fragments, drawn.leafGeometryFraction, {}};
+      drawn.counts.primitives, drawn.counts.fragments, drawn.leafGeometryFraction, {}, {}, {}};
   if (!drawn.instancesPerLevel.empty()) record.instancesPerLevel = drawn.instancesPerLevel;
+  if (!drawn.woodInstancesPerLevel.empty())
+    record.woodInstancesPerLevel = drawn.woodInstancesPerLevel;
+  record.instancesVisible = drawn.instancesVisible;
   return record;
 }
 

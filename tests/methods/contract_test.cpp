@@ -239,6 +239,34 @@ TEST_P(MethodContract, DrawsForestsWithoutGlErrors) {
   EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
 }
 
+// The harness culls instances by their bounding spheres against the frustum: from inside a
+// forest, half of it behind the camera, a frame is the same with and without culling, and the
+// trees behind are not handed to the method.
+TEST_P(MethodContract, CullingDropsOnlyTreesTheFrameDoesNotShow) {
+  const Tree tree = test::smallTree();
+  auto method = bakeAndUpload(tree, "m");
+  mHarness->setTree(tree.bounds, tree.leaves.size());
+  const float radius = tree.boundingSphereRadius();
+  const auto forest = layoutForest(36, radius, 11);
+  Camera camera;
+  camera.position = {0.0f, tree.bounds.center().y, 0.3f * radius};
+  camera.target = camera.position + glm::vec3(1.0f, -0.1f, 0.4f);
+  camera.farPlane = 40.0f * radius;
+  DrawnStats culled, all;
+  const ImageRgba8 withCulling =
+      mHarness->renderForestFrame(*method, forest, tree.bounds, camera, 96, 96, &culled);
+  mHarness->setInstanceCulling(false);
+  const ImageRgba8 without =
+      mHarness->renderForestFrame(*method, forest, tree.bounds, camera, 96, 96, &all);
+  mHarness->setInstanceCulling(true);
+  EXPECT_GT(coveredPixels(withCulling), 96 * 96 / 10);
+  EXPECT_EQ(withCulling, without);
+  EXPECT_EQ(all.instancesVisible, 36.0);
+  EXPECT_GT(culled.instancesVisible, 3.0);
+  EXPECT_LT(culled.instancesVisible, 26.0) << "about half the forest is behind the camera";
+  EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
+}
+
 // Timing several methods at once (how the runner times a tree's variants) gives each the scores
 // and draw counts it gets alone, and every camera the repeats asked for: the shared passes only
 // change when the draws happen, never what is drawn or whose result is whose.
