@@ -75,7 +75,8 @@ std::pair<std::span<const Instance>, GLuint> Harness::visibleInstances(
   std::array<glm::vec4, 6> planes = {m[3] + m[0], m[3] - m[0], m[3] + m[1],
                                      m[3] - m[1], m[3] + m[2], m[3] - m[2]};
   for (glm::vec4& plane : planes) plane /= std::max(glm::length(glm::vec3(plane)), 1e-20f);
-  std::vector<std::pair<float, uint32_t>> visible;  // (distance, instance)
+  std::vector<std::pair<float, uint32_t>>& visible = mVisibleOrder;
+  visible.clear();
   for (size_t i = 0; i < mUploadedInstances.size(); ++i) {
     const glm::vec4& sphere = mInstanceSpheres[i];
     const bool inside = std::all_of(planes.begin(), planes.end(), [&](const glm::vec4& plane) {
@@ -93,21 +94,7 @@ std::pair<std::span<const Instance>, GLuint> Harness::visibleInstances(
     mVisible.push_back(mUploadedInstances[i]);
     mVisibleMatrices.push_back(mInstanceMatrices[i]);
   }
-  if (mVisibleMatrices.size() > mVisibleCapacity || !mVisibleBuffer.id()) {
-    mVisibleCapacity = std::max<size_t>(mVisibleMatrices.size(), 16);
-    gl::Device::OwnerScope owner(mDevice, "harness");
-    mVisibleBuffer = mDevice.createBuffer(gl::MemoryCategory::kOther, GL_ARRAY_BUFFER,
-                                          mVisibleCapacity * sizeof(glm::mat4), nullptr,
-                                          "visible instance matrices", GL_DYNAMIC_DRAW);
-  }
-  if (!mVisibleMatrices.empty()) {
-    const gl::Api& g = gl::api();
-    g.BindBuffer(GL_ARRAY_BUFFER, mVisibleBuffer.id());
-    g.BufferSubData(GL_ARRAY_BUFFER, 0,
-                    static_cast<GLsizeiptr>(mVisibleMatrices.size() * sizeof(glm::mat4)),
-                    mVisibleMatrices.data());
-    g.BindBuffer(GL_ARRAY_BUFFER, 0);
-  }
+  mVisibleBuffer.upload(mDevice, "harness", mVisibleMatrices, "visible instance matrices");
   return {std::span<const Instance>(mVisible), mVisibleBuffer.id()};
 }
 
@@ -137,6 +124,12 @@ void resetDrawState(const gl::Api& g) {
   g.DepthMask(GL_TRUE);
   g.Disable(GL_BLEND);
   g.Disable(GL_CULL_FACE);
+}
+
+// Adds per-level instance counts into a running sum that may have fewer levels so far.
+void addPerLevel(std::vector<uint64_t>& sum, const std::vector<uint64_t>& counts) {
+  sum.resize(std::max(sum.size(), counts.size()), 0);
+  for (size_t level = 0; level < counts.size(); ++level) sum[level] += counts[level];
 }
 
 double millisecondsSince(std::chrono::steady_clock::time_point start) {
@@ -327,14 +320,8 @@ void Harness::scoreBlock(Method& method, const std::vector<Instance>& forest,
   result.referenceCoverage += double(covered) / double(width * height) / blocks;
   result.drawn.counts += methodDrawn.counts;
   result.drawn.leafGeometryFraction += methodDrawn.leafGeometryFraction / blocks;
-  std::vector<uint64_t>& levels = result.drawn.instancesPerLevel;
-  levels.resize(std::max(levels.size(), methodDrawn.instancesPerLevel.size()), 0);
-  for (size_t l = 0; l < methodDrawn.instancesPerLevel.size(); ++l)
-    levels[l] += methodDrawn.instancesPerLevel[l];
-  std::vector<uint64_t>& woodLevels = result.drawn.woodInstancesPerLevel;
-  woodLevels.resize(std::max(woodLevels.size(), methodDrawn.woodInstancesPerLevel.size()), 0);
-  for (size_t l = 0; l < methodDrawn.woodInstancesPerLevel.size(); ++l)
-    woodLevels[l] += methodDrawn.woodInstancesPerLevel[l];
+  addPerLevel(result.drawn.instancesPerLevel, methodDrawn.instancesPerLevel);
+  addPerLevel(result.drawn.woodInstancesPerLevel, methodDrawn.woodInstancesPerLevel);
   result.drawn.instancesVisible += methodDrawn.instancesVisible / blocks;
   result.referenceDrawn.instancesVisible += referenceDrawn.instancesVisible / blocks;
   result.referenceDrawn.counts += referenceDrawn.counts;

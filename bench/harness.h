@@ -13,6 +13,7 @@
 #include "common/image.h"
 #include "common/metrics.h"
 #include "common/views.h"
+#include "methods/common/lod_instances.h"
 #include "methods/method.h"
 
 namespace canopy {
@@ -226,8 +227,8 @@ class Harness {
   std::vector<glm::vec4> mInstanceSpheres;  // world centre and radius of each
   std::vector<Instance> mVisible;           // the last frame's culled instances and their matrices
   std::vector<glm::mat4> mVisibleMatrices;
-  gl::Buffer mVisibleBuffer;
-  size_t mVisibleCapacity = 0;
+  std::vector<std::pair<float, uint32_t>> mVisibleOrder;  // (distance, instance), reused
+  StreamedMatrices mVisibleBuffer;
   bool mCulling = true;
   Aabb mTreeBounds;
   size_t mTreeLeaves = 0;

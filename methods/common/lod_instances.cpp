@@ -6,6 +6,22 @@
 
 namespace canopy {
 
+void StreamedMatrices::upload(gl::Device& device, const std::string& owner,
+                              std::span<const glm::mat4> matrices, const char* label) {
+  if (matrices.size() > mCapacity || !mBuffer.id()) {
+    mCapacity = std::max<size_t>(matrices.size(), 16);
+    gl::Device::OwnerScope scope(device, owner);
+    mBuffer = device.createBuffer(gl::MemoryCategory::kOther, GL_ARRAY_BUFFER,
+                                  mCapacity * sizeof(glm::mat4), nullptr, label, GL_DYNAMIC_DRAW);
+  }
+  if (matrices.empty()) return;
+  const gl::Api& g = gl::api();
+  g.BindBuffer(GL_ARRAY_BUFFER, mBuffer.id());
+  g.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(matrices.size_bytes()),
+                  matrices.data());
+  g.BindBuffer(GL_ARRAY_BUFFER, 0);
+}
+
 void LodInstances::attach(gl::Device& device, std::string owner) {
   mDevice = &device;
   mOwner = std::move(owner);
@@ -42,18 +58,7 @@ void LodInstances::update(const FrameContext& frame, std::span<const Instance> i
                       static_cast<GLsizei>(byLevel[level].size())};
     mMatrices.insert(mMatrices.end(), byLevel[level].begin(), byLevel[level].end());
   }
-  if (mMatrices.size() > mCapacity || !mBuffer.id()) {
-    mCapacity = std::max<size_t>(mMatrices.size(), 16);
-    gl::Device::OwnerScope owner(*mDevice, mOwner);
-    mBuffer = mDevice->createBuffer(gl::MemoryCategory::kOther, GL_ARRAY_BUFFER,
-                                    mCapacity * sizeof(glm::mat4), nullptr,
-                                    "per-frame instance lists", GL_DYNAMIC_DRAW);
-  }
-  const gl::Api& g = gl::api();
-  g.BindBuffer(GL_ARRAY_BUFFER, mBuffer.id());
-  g.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(mMatrices.size() * sizeof(glm::mat4)),
-                  mMatrices.data());
-  g.BindBuffer(GL_ARRAY_BUFFER, 0);
+  mBuffer.upload(*mDevice, mOwner, mMatrices, "per-frame instance lists");
 }
 
 }  // namespace canopy

@@ -10,6 +10,19 @@
 
 namespace canopy {
 
+// A buffer of instance matrices rewritten every frame: it grows when a frame holds more than it
+// can, and is charged to `owner` in the device's ledger.
+class StreamedMatrices {
+ public:
+  void upload(gl::Device& device, const std::string& owner, std::span<const glm::mat4> matrices,
+              const char* label);
+  GLuint id() const { return mBuffer.id(); }
+
+ private:
+  gl::Buffer mBuffer;
+  size_t mCapacity = 0;
+};
+
 // Sorts a frame's instances into levels of detail by their projected size in output pixels (the
 // instance's bounding radius seen from the camera, FrameContext::projectedPixels) and uploads
 // their matrices level by level into one buffer. Shared by the methods with geometric LoD.
@@ -38,8 +51,7 @@ class LodInstances {
  private:
   gl::Device* mDevice = nullptr;
   std::string mOwner;
-  gl::Buffer mBuffer;
-  size_t mCapacity = 0;
+  StreamedMatrices mBuffer;
   std::vector<Range> mRanges;
   std::vector<glm::mat4> mMatrices;
   uint64_t mSignature = 0;

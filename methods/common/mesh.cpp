@@ -150,7 +150,7 @@ std::vector<uint64_t> WoodRenderer::instancesPerLevel() const {
 nlohmann::json WoodRenderer::describeLevels() const {
   nlohmann::json levels = nlohmann::json::array();
   for (size_t level = 0; level < mLevels.levels(); ++level)
-    levels.push_back({{"triangles", mLevels.triangles[level]}, {"error", mLevels.errors[level]}});
+    levels.push_back({{"triangles", mLevels.triangles(level)}, {"error", mLevels.errors[level]}});
   return levels;
 }
 
@@ -174,15 +174,13 @@ struct WoodMaterialFields {
   }
 };
 
-// One level of detail: how many of wood_ranges.bin it takes, its triangles and error bound.
+// One level of detail: how many of wood_ranges.bin it takes and its error bound.
 struct WoodLevelFields {
   uint32_t ranges = 0;
-  uint32_t triangles = 0;
   float error = 0.0f;
   template <class V>
   void visit(V& v) {
     v("ranges", ranges);
-    v("triangles", triangles);
     v("error", error);
   }
 };
@@ -216,8 +214,7 @@ void WoodRenderer::save(AssetFolder& asset) const {
   asset.writeBlob("wood_ranges.bin", mLevels.ranges);
   WoodFields fields;
   for (size_t level = 0; level < mLevels.levels(); ++level) {
-    fields.wood.levels.push_back(
-        {mLevels.rangesPerLevel[level], mLevels.triangles[level], mLevels.errors[level]});
+    fields.wood.levels.push_back({mLevels.rangesPerLevel[level], mLevels.errors[level]});
   }
   fields.wood.boundsMin = {mBounds.min.x, mBounds.min.y, mBounds.min.z};
   fields.wood.boundsMax = {mBounds.max.x, mBounds.max.y, mBounds.max.z};
@@ -240,7 +237,6 @@ void WoodRenderer::load(AssetFolder& asset) {
   asset.readFields(fields);
   for (const WoodLevelFields& level : fields.wood.levels) {
     mLevels.rangesPerLevel.push_back(level.ranges);
-    mLevels.triangles.push_back(level.triangles);
     mLevels.errors.push_back(level.error);
   }
   const auto& lo = fields.wood.boundsMin;

@@ -57,7 +57,7 @@ class WoodRenderer {
             float errorPixels = 0.0f);
   void save(AssetFolder& asset) const;  // blobs and images prefixed "wood_", header key "wood"
   void load(AssetFolder& asset);
-  size_t triangleCount() const { return mLevels.triangles.empty() ? 0 : mLevels.triangles[0]; }
+  size_t triangleCount() const { return mLevels.levels() == 0 ? 0 : mLevels.triangles(0); }
   // The levels for bake reports: triangles and error bound (world units) of each.
   nlohmann::json describeLevels() const;
   // `report` with "wood_levels" (describeLevels) added: every impostor's bake report has it.

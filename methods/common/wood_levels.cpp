@@ -19,17 +19,21 @@ std::vector<float> WoodLevels::thresholds(float treeRadius, float errorPixels) c
   return result;
 }
 
+uint32_t WoodLevels::triangles(size_t level) const {
+  const size_t begin = firstRange(level);
+  uint32_t count = 0;
+  for (size_t r = begin; r < begin + rangesPerLevel[level]; ++r) count += ranges[r].count / 3;
+  return count;
+}
+
 bool WoodLevels::consistent() const {
-  if (errors.size() != levels() || triangles.size() != levels()) return false;
-  if (firstRange(levels()) != ranges.size()) return false;
+  if (errors.size() != levels() || firstRange(levels()) != ranges.size()) return false;
+  size_t next = 0;  // every level's triangles follow the previous level's
   for (const WoodRange& range : ranges) {
-    if (size_t(range.first) + range.count > indices.size() || range.count % 3 != 0) return false;
+    if (range.first != next || range.count % 3 != 0) return false;
+    next += range.count;
   }
-  for (size_t level = 0, r = 0; level < levels(); ++level) {
-    uint64_t count = 0;
-    for (uint32_t k = 0; k < rangesPerLevel[level]; ++k) count += ranges[r++].count;
-    if (count != 3ull * triangles[level]) return false;
-  }
+  if (next != indices.size()) return false;
   for (size_t level = 1; level < levels(); ++level) {
     if (!(errors[level] >= errors[level - 1])) return false;
   }
@@ -68,34 +72,26 @@ size_t simplifyRange(std::vector<uint32_t>& out, const std::vector<glm::vec3>& p
   return kept;
 }
 
-// Appends one level: each material range of the full mesh simplified within `relativeError`.
-void appendSimplified(WoodLevels& levels, const std::vector<glm::vec3>& positions,
-                      const std::vector<uint32_t>& indices, const std::vector<WoodRange>& ranges,
-                      float relativeError) {
-  uint32_t triangles = 0, kept = 0;
+// One level: each material range of the full mesh simplified within `relativeError`, its
+// ranges starting from index 0 of its own `indices`.
+struct SimplifiedLevel {
+  std::vector<uint32_t> indices;
+  std::vector<WoodRange> ranges;
+};
+
+SimplifiedLevel simplifyLevel(const std::vector<glm::vec3>& positions,
+                              const std::vector<uint32_t>& indices,
+                              const std::vector<WoodRange>& ranges, float relativeError) {
+  SimplifiedLevel level;
   std::vector<uint32_t> simplified;
   for (const WoodRange& range : ranges) {
     const size_t count = simplifyRange(simplified, positions, indices.data() + range.first,
                                        range.count, relativeError);
     if (count == 0) continue;  // the whole material vanished within the error
-    levels.ranges.push_back({uint32_t(levels.indices.size()), uint32_t(count), range.material});
-    levels.indices.insert(levels.indices.end(), simplified.begin(),
-                          simplified.begin() + long(count));
-    triangles += uint32_t(count / 3);
-    ++kept;
+    level.ranges.push_back({uint32_t(level.indices.size()), uint32_t(count), range.material});
+    level.indices.insert(level.indices.end(), simplified.begin(), simplified.begin() + long(count));
   }
-  levels.rangesPerLevel.push_back(kept);
-  levels.triangles.push_back(triangles);
-}
-
-// Removes the last level appended (one that did not pay).
-void dropLastLevel(WoodLevels& levels) {
-  const size_t first = levels.firstRange(levels.levels() - 1);
-  levels.indices.resize(first < levels.ranges.size() ? levels.ranges[first].first
-                                                     : levels.indices.size());
-  levels.ranges.resize(first);
-  levels.rangesPerLevel.pop_back();
-  levels.triangles.pop_back();
+  return level;
 }
 
 }  // namespace
@@ -109,19 +105,22 @@ WoodLevels buildWoodLevels(const std::vector<glm::vec3>& positions,
   levels.ranges = ranges;
   levels.rangesPerLevel = {uint32_t(ranges.size())};
   levels.errors = {0.0f};
-  levels.triangles = {uint32_t(indices.size() / 3)};
   if (positions.empty() || indices.empty() || finestError <= 0.0f) return levels;
   const float scale = meshopt_simplifyScale(&positions[0].x, positions.size(), sizeof(glm::vec3));
   if (!(scale > 0.0f)) return levels;
-  for (float bound = finestError; bound <= coarsestError * 1.0001f; bound *= 2.0f) {
-    const uint32_t previous = levels.triangles.back();
-    if (previous == 0) break;
-    appendSimplified(levels, positions, indices, ranges, bound / scale);
-    if (uint64_t(levels.triangles.back()) * 6 > uint64_t(previous) * 5) {
-      dropLastLevel(levels);
-      continue;
+  size_t previous = indices.size();  // indices of the last level kept
+  for (float bound = finestError; bound <= coarsestError * 1.0001f && previous > 0; bound *= 2.0f) {
+    const SimplifiedLevel level = simplifyLevel(positions, indices, ranges, bound / scale);
+    if (uint64_t(level.indices.size()) * 6 > uint64_t(previous) * 5) continue;  // does not pay
+    const auto offset = uint32_t(levels.indices.size());
+    for (WoodRange range : level.ranges) {
+      range.first += offset;
+      levels.ranges.push_back(range);
     }
+    levels.indices.insert(levels.indices.end(), level.indices.begin(), level.indices.end());
+    levels.rangesPerLevel.push_back(uint32_t(level.ranges.size()));
     levels.errors.push_back(bound);  // the bound meshoptimizer kept every collapse within
+    previous = level.indices.size();
   }
   return levels;
 }

@@ -23,16 +23,17 @@ struct WoodLevels {
   std::vector<WoodRange> ranges;         // every level's ranges, level by level
   std::vector<uint32_t> rangesPerLevel;  // how many of `ranges` each level has
   std::vector<float> errors;  // each level's largest deviation from the full mesh (world units)
-  std::vector<uint32_t> triangles;  // each level's triangle count
 
   size_t levels() const { return rangesPerLevel.size(); }
   // The index of level `level`'s first range in `ranges`.
   size_t firstRange(size_t level) const;
+  uint32_t triangles(size_t level) const;
   // Projected tree radii (output pixels) below which the next coarser level is drawn, so that no
   // level's error spans more than `errorPixels` output pixels (LodInstances' thresholds): level
   // l + 1 is allowed once its error × radiusPixels / treeRadius <= errorPixels.
   std::vector<float> thresholds(float treeRadius, float errorPixels) const;
-  // Structural checks after loading: ranges inside `indices`, counts that add up.
+  // Structural checks after loading: the ranges tile `indices` in order, whole triangles, one
+  // error per level, errors that do not fall.
   bool consistent() const;
 };
 

@@ -78,11 +78,11 @@ TEST(WoodLevels, FewerTrianglesPerLevelWithinDoublingBounds) {
   const WoodLevels levels = buildWoodLevels(mesh.positions, mesh.indices, ranges, 0.001f, 0.5f);
   ASSERT_TRUE(levels.consistent());
   ASSERT_GE(levels.levels(), 3u);
-  EXPECT_EQ(levels.triangles[0], mesh.indices.size() / 3) << "level 0 is the full mesh";
+  EXPECT_EQ(levels.triangles(0), mesh.indices.size() / 3) << "level 0 is the full mesh";
   EXPECT_EQ(levels.errors[0], 0.0f);
   for (size_t l = 1; l < levels.levels(); ++l) {
     // Each kept level removes at least a sixth of the one before (the rest are skipped).
-    EXPECT_LE(uint64_t(levels.triangles[l]) * 6, uint64_t(levels.triangles[l - 1]) * 5) << l;
+    EXPECT_LE(uint64_t(levels.triangles(l)) * 6, uint64_t(levels.triangles(l - 1)) * 5) << l;
     EXPECT_GT(levels.errors[l], levels.errors[l - 1]);
     EXPECT_LE(levels.errors[l], 0.5f * 1.0001f);
     // Every simplified vertex is a vertex of the full mesh (neither simplifier invents one); a
