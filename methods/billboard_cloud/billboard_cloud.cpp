@@ -28,6 +28,7 @@ struct BillboardCloudParams {
   bool mipmaps = true;
   WoodParams wood;
   std::string compression = "none";
+  bool backCapture = true;
 
   template <class Visitor>
   void visit(Visitor& v) {
@@ -40,6 +41,9 @@ struct BillboardCloudParams {
     wood.visit(v);
     v("compression", compression, {"none", "dxt1", "dxt5"},
       "the atlas: uncompressed, BC1 or BC3 (S3TC)");
+    v("back_capture", backCapture,
+      "a second atlas layer captured from each billboard's back side (false: seen from behind, "
+      "a billboard shows its front capture mirrored, as the classic method does)");
   }
 };
 
@@ -80,13 +84,22 @@ class BillboardCloudMethod final : public Method {
           mParams.density, preview.width, preview.height, kMaxAtlas);
     }
     const LeafImageSampler sampler(tree);
-    std::vector<ImageRgba8> images(billboards.size());
-    tbb::parallel_for(size_t(0), billboards.size(), [&](size_t i) {
-      images[i] = captureLeavesOrthographic(tree, sampler, billboards[i]->leaves, *billboards[i],
-                                            sizes[i].x, sizes[i].y, mParams.supersample);
+    const int sides = mParams.backCapture ? 2 : 1;
+    std::vector<ImageRgba8> images(billboards.size() * sides);
+    tbb::parallel_for(size_t(0), images.size(), [&](size_t k) {
+      const size_t i = k % billboards.size();
+      images[k] = captureLeavesOrthographic(tree, sampler, billboards[i]->leaves, *billboards[i],
+                                            sizes[i].x, sizes[i].y, mParams.supersample,
+                                            k >= billboards.size());
     });
-    const ImageAtlas atlas = composeAtlas(images, kAtlasPadding, kAtlasAlignment);
-    mAtlas = atlas.image;
+    // Both sides share one layout: the back capture is the atlas' second layer.
+    const std::vector<ImageRgba8> fronts(images.begin(), images.begin() + long(billboards.size()));
+    const ImageAtlas atlas = composeAtlas(fronts, kAtlasPadding, kAtlasAlignment);
+    mAtlas = {atlas.image};
+    if (mParams.backCapture) {
+      const std::vector<ImageRgba8> backs(images.begin() + long(billboards.size()), images.end());
+      mAtlas.push_back(composeAtlas(backs, kAtlasPadding, kAtlasAlignment).image);
+    }
     mVertices.clear();
     mIndices.clear();
     for (size_t i = 0; i < billboards.size(); ++i) {
@@ -106,8 +119,8 @@ class BillboardCloudMethod final : public Method {
                                "billboard vertices");
     mIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mIndices,
                                "billboard indices");
-    mAtlasTexture = uploadAlphaTestedTexture(device, mAtlas, mParams.mipmaps, "billboard atlas",
-                                             parseCompression(mParams.compression));
+    mAtlasTexture = uploadAlphaTestedArray(device, mAtlas, mParams.mipmaps, "billboard atlas",
+                                           parseCompression(mParams.compression));
     mVao = makeMeshVertexArray(mVbo, mIbo);
     mProgram =
         device.createProgram({gl::embeddedShader("methods/common/mesh.vert"),
@@ -123,8 +136,13 @@ class BillboardCloudMethod final : public Method {
     mProgram.use();
     setFrameUniforms(mProgram, frame);
     mProgram.set("uAtlas", 0);
+    mProgram.set("uBackLayer", float(mAtlas.size() - 1));
+    // The lit variant declares the occlusion sampler too: a unit of its own (a 2D and an array
+    // sampler on one unit is an invalid draw), unused as uHasOcclusion is 0.
+    mProgram.set("uOcclusion", 1);
+    mProgram.set("uHasOcclusion", 0);
     g.ActiveTexture(GL_TEXTURE0);
-    g.BindTexture(GL_TEXTURE_2D, mAtlasTexture.id());
+    g.BindTexture(GL_TEXTURE_2D_ARRAY, mAtlasTexture.id());
     g.BindVertexArray(mVao.id());
     mLevels.draw(mLod, {});
     g.BindVertexArray(0);
@@ -143,7 +161,8 @@ class BillboardCloudMethod final : public Method {
     mLevels.save(asset);
     asset.writeBlob("vertices.bin", mVertices);
     asset.writeBlob("indices.bin", mIndices);
-    asset.writeImage("atlas.png", mAtlas);
+    asset.writeImage("atlas.png", mAtlas[0]);
+    if (mAtlas.size() > 1) asset.writeImage("atlas_back.png", mAtlas[1]);
     mWood.save(asset);
     asset.writeHeader();
   }
@@ -152,7 +171,12 @@ class BillboardCloudMethod final : public Method {
     mReport = asset.readHeaderOf("billboard_cloud");
     mVertices = asset.readBlobAs<MeshVertex>("vertices.bin");
     mIndices = asset.readBlobAs<uint32_t>("indices.bin");
-    mAtlas = asset.readImage("atlas.png");
+    mAtlas = {asset.readImage("atlas.png")};
+    if (mParams.backCapture) {
+      mAtlas.push_back(asset.readImage("atlas_back.png"));
+      if (mAtlas[1].width != mAtlas[0].width || mAtlas[1].height != mAtlas[0].height)
+        throwInputError("{}: atlas_back.png is not the size of atlas.png", asset.folder().string());
+    }
     mWood.load(asset);
     validateIndices(mIndices, mVertices.size(), asset.folder().string());
     mLevels.load(asset, mIndices.size());
@@ -166,7 +190,7 @@ class BillboardCloudMethod final : public Method {
   CloudLevels mLevels;
   std::vector<MeshVertex> mVertices;
   std::vector<uint32_t> mIndices;
-  ImageRgba8 mAtlas;
+  std::vector<ImageRgba8> mAtlas;  // the front capture, then the back capture if any
   gl::Buffer mVbo, mIbo;
   gl::VertexArray mVao;
   gl::Texture mAtlasTexture;

@@ -1,10 +1,13 @@
 #version 430 core
 // A textured billboard (the classic billboard cloud, the multi-layer method's far level): alpha
-// test at 0.5 on the captured coverage, albedo or two-sided Lambert with the plane normal.
+// test at 0.5 on the captured coverage, albedo or two-sided Lambert with the plane normal. Layer
+// 0 holds what the billboard's front side sees, layer uBackLayer what its back side sees (the
+// same plane points, so the same uv; 0 when only the front was captured).
 in vec3 vNormal;
 in vec2 vUv;
 
-uniform sampler2D uAtlas;  // sRGB, so samples are linear
+uniform sampler2DArray uAtlas;  // sRGB, so samples are linear
+uniform float uBackLayer;
 uniform sampler2D uOcclusion;  // ambient occlusion over the same atlas (R), when uHasOcclusion
 uniform int uHasOcclusion;
 #include "methods/common/lighting.glsl"
@@ -12,7 +15,7 @@ uniform int uHasOcclusion;
 out vec4 outColor;
 
 void main() {
-  vec4 texel = texture(uAtlas, vUv);
+  vec4 texel = texture(uAtlas, vec3(vUv, gl_FrontFacing ? 0.0 : uBackLayer));
   if (texel.a < 0.5) discard;
   vec3 color = texel.rgb;
   if (uLit != 0) {

@@ -2,7 +2,6 @@
 
 #include <tbb/parallel_for.h>
 
-#include <Eigen/Dense>
 #include <cmath>
 #include <stdexcept>
 
@@ -49,28 +48,6 @@ std::vector<glm::vec4> computeLeafCornerOcclusion(const Tree& tree, int rays, ui
     }
   });
   return result;
-}
-
-glm::vec4 fitCornerValues(const std::vector<glm::vec2>& points, const std::vector<float>& values,
-                          glm::vec2 spriteCenter, float spriteSide) {
-  const size_t n = points.size();
-  Eigen::MatrixXd a(n, 4);
-  Eigen::VectorXd b(n);
-  double mean = 0.0;
-  for (size_t i = 0; i < n; ++i) {
-    const glm::vec2 unit = (points[i] - spriteCenter) / spriteSide + 0.5f;
-    const double s = unit.x, t = unit.y;
-    a.row(i) << (1 - s) * (1 - t), s * (1 - t), s * t, (1 - s) * t;
-    b(i) = values[i];
-    mean += values[i];
-  }
-  mean /= double(std::max<size_t>(n, 1));
-  // Least squares on the deviation from the mean; the complete orthogonal decomposition gives the
-  // minimum-norm solution when the points do not determine all four corners.
-  const Eigen::VectorXd deviation =
-      a.completeOrthogonalDecomposition().solve(b - Eigen::VectorXd::Constant(n, mean));
-  return glm::vec4(float(mean + deviation(0)), float(mean + deviation(1)),
-                   float(mean + deviation(2)), float(mean + deviation(3)));
 }
 
 float interpolateCorners(const glm::vec4& corners, glm::vec2 unit) {

@@ -17,14 +17,7 @@ namespace canopy {
 // `seed` whatever the thread count (each corner has its own random stream).
 std::vector<glm::vec4> computeLeafCornerOcclusion(const Tree& tree, int rays, uint64_t seed);
 
-// §5.2, Fig. 11: the ambient term at the four corners (−,−) (+,−) (+,+) (−,+) of a square sprite
-// (centre, side) from values at points inside it, by the over-determined system that bilinear
-// interpolation between the corners reproduces each value (least squares, Eigen). Rank-deficient
-// systems (points on a line) fall back to the minimum-norm deviation from the mean value.
-glm::vec4 fitCornerValues(const std::vector<glm::vec2>& points, const std::vector<float>& values,
-                          glm::vec2 spriteCenter, float spriteSide);
-
-// Bilinear interpolation of corner values at unit coordinates in [0, 1]².
+// Bilinear interpolation of corner values (−,−) (+,−) (+,+) (−,+) at unit coordinates in [0, 1]².
 float interpolateCorners(const glm::vec4& corners, glm::vec2 unit);
 
 }  // namespace canopy

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <numeric>
 
 #include <glm/geometric.hpp>
 
@@ -58,18 +59,28 @@ struct Plane {
   glm::vec3 normal{0, 0, 1};
 };
 
-// Least-squares plane through points: the centroid and the eigenvector of the smallest
-// eigenvalue of their covariance.
-Plane fitPlane(const std::vector<glm::vec3>& points, const glm::vec3& preferredSide) {
+// The plane that minimises a cluster's share of the clustering cost: through the centroid of
+// the leaf corners, with the normal N minimising Nᵀ(¼·C − w·S)N, where C is the corners'
+// scatter about their centroid (¼ of it: the fit term averages a leaf's four corners) and
+// S = Σ n nᵀ the leaves' normal scatter weighted by the orientation scale w: the eigenvector of
+// the smallest eigenvalue. With w = 0 it is the least-squares plane of the corners; the larger w,
+// the more the normal follows the leaves' own orientations. Assignment and refit minimise the
+// same cost, so the iteration descends.
+Plane fitPlane(const std::vector<glm::vec3>& points, const std::vector<glm::vec3>& leafNormals,
+               float orientationScale, const glm::vec3& preferredSide) {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (const glm::vec3& p : points) mean += Eigen::Vector3d(p.x, p.y, p.z);
   mean /= double(points.size());
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d cost = Eigen::Matrix3d::Zero();
   for (const glm::vec3& p : points) {
     const Eigen::Vector3d d = Eigen::Vector3d(p.x, p.y, p.z) - mean;
-    covariance += d * d.transpose();
+    cost += 0.25 * d * d.transpose();
   }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+  for (const glm::vec3& n : leafNormals) {
+    const Eigen::Vector3d e(n.x, n.y, n.z);
+    cost -= double(orientationScale) * e * e.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(cost);
   const Eigen::Vector3d n = solver.eigenvectors().col(0);  // eigenvalues ascend
   Plane plane;
   plane.origin = glm::vec3(mean.x(), mean.y(), mean.z());
@@ -122,6 +133,89 @@ Rectangle2D minimumAreaRectangle(const std::vector<glm::vec2>& points) {
   }
   return best;
 }
+
+namespace {
+
+// Leaves of one plane grouped so that two groups' leaves lie more than `gap` apart on the plane
+// (their projected bounding boxes, each grown by gap / 2, do not overlap): union-find over a
+// sweep along the first plane axis. Groups in order of their first leaf, leaves in input order.
+std::vector<std::vector<uint32_t>> splitIntoGroups(const Tree& tree, const glm::vec3& normal,
+                                                   const std::vector<uint32_t>& leaves, float gap) {
+  const glm::vec3 e1 = anyPerpendicular(normal), e2 = glm::cross(normal, e1);
+  const size_t n = leaves.size();
+  std::vector<glm::vec2> lo(n, glm::vec2(std::numeric_limits<float>::max())),
+      hi(n, glm::vec2(std::numeric_limits<float>::lowest()));
+  for (size_t i = 0; i < n; ++i) {
+    for (int c = 0; c < 4; ++c) {
+      const glm::vec3 p = tree.leaves[leaves[i]].corner(c);
+      const glm::vec2 q(glm::dot(p, e1), glm::dot(p, e2));
+      lo[i] = glm::min(lo[i], q - 0.5f * gap);
+      hi[i] = glm::max(hi[i], q + 0.5f * gap);
+    }
+  }
+  std::vector<size_t> parent(n), order(n);
+  std::iota(parent.begin(), parent.end(), size_t(0));
+  std::iota(order.begin(), order.end(), size_t(0));
+  const auto root = [&](size_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  std::sort(order.begin(), order.end(),
+            [&](size_t a, size_t b) { return lo[a].x < lo[b].x || (lo[a].x == lo[b].x && a < b); });
+  for (size_t a = 0; a < n; ++a) {
+    const size_t i = order[a];
+    for (size_t b = a + 1; b < n && lo[order[b]].x <= hi[i].x; ++b) {
+      const size_t j = order[b];
+      if (lo[j].y > hi[i].y || lo[i].y > hi[j].y) continue;
+      const size_t ri = root(i), rj = root(j);
+      if (ri != rj) parent[std::max(ri, rj)] = std::min(ri, rj);
+    }
+  }
+  std::vector<std::vector<uint32_t>> groups;
+  std::vector<size_t> groupOfRoot(n, SIZE_MAX);
+  for (size_t i = 0; i < n; ++i) {
+    const size_t r = root(i);
+    if (groupOfRoot[r] == SIZE_MAX) {
+      groupOfRoot[r] = groups.size();
+      groups.emplace_back();
+    }
+    groups[groupOfRoot[r]].push_back(leaves[i]);
+  }
+  return groups;
+}
+
+// The billboard of `leaves` on `plane`: the minimum-area rectangle of their projected corners.
+Billboard makeBillboard(const Tree& tree, const Plane& plane, const std::vector<uint32_t>& leaves) {
+  Billboard billboard;
+  const glm::vec3 e1 = anyPerpendicular(plane.normal);
+  const glm::vec3 e2 = glm::cross(plane.normal, e1);
+  std::vector<glm::vec2> projected;
+  double distanceSum = 0.0;
+  for (uint32_t i : leaves) {
+    const Leaf& leaf = tree.leaves[i];
+    for (int c = 0; c < 4; ++c) {
+      const glm::vec3 d = leaf.corner(c) - plane.origin;
+      projected.emplace_back(glm::dot(d, e1), glm::dot(d, e2));
+      const float distance = std::abs(glm::dot(d, plane.normal));
+      distanceSum += distance;
+      billboard.maxPlaneDistance = std::max(billboard.maxPlaneDistance, distance);
+    }
+    const float alignment = std::abs(glm::dot(plane.normal, leaf.normal));
+    billboard.projectedLeafArea += leaf.area() * alignment;
+    billboard.alignmentSum += alignment;
+  }
+  const Rectangle2D rectangle = minimumAreaRectangle(projected);
+  billboard.normal = plane.normal;
+  billboard.axisU = glm::normalize(e1 * rectangle.axis.x + e2 * rectangle.axis.y);
+  billboard.axisV = glm::normalize(glm::cross(plane.normal, billboard.axisU));
+  billboard.center = plane.origin + e1 * rectangle.center.x + e2 * rectangle.center.y;
+  billboard.halfExtents = rectangle.halfExtents;
+  billboard.leaves = leaves;
+  billboard.meanPlaneDistance = float(distanceSum / double(4 * leaves.size()));
+  return billboard;
+}
+
+}  // namespace
 
 BillboardCloud buildBillboardCloud(const Tree& tree, const ClusteringParams& params,
                                    uint64_t seed) {
@@ -223,58 +317,48 @@ BillboardCloud buildBillboardCloud(const Tree& tree, const ClusteringParams& par
       cost[worst] = 0.0f;
     }
     tbb::parallel_for(0, k, [&](int c) {
-      std::vector<glm::vec3> points;
+      std::vector<glm::vec3> points, normals;
       glm::vec3 normalSum(0.0f), centroid(0.0f);
       for (uint32_t i : members[c]) {
         for (const glm::vec3& corner : leaves[i].corners) points.push_back(corner);
+        normals.push_back(leaves[i].normal);
         normalSum += leaves[i].normal;
         centroid += leaves[i].center;
       }
-      planes[c] = fitPlane(points, normalSum);
+      planes[c] = fitPlane(points, normals, orientationScale, normalSum);
       centroids[c] = centroid / float(members[c].size());
     });
     if (stable) break;
   }
 
-  // Billboards: the minimum-area rectangle of each cluster's projected leaf corners.
+  // Billboards: each cluster's plane, cut into groups of leaves that lie apart on it, each
+  // group bounded by the minimum-area rectangle of its leaves' projected corners.
   std::vector<std::vector<uint32_t>> members(k);
   for (size_t i = 0; i < leafCount; ++i) members[assignment[i]].push_back(static_cast<uint32_t>(i));
-  cloud.billboards.resize(k);
+  const float gap = params.splitGap * float(leafSize / double(leafCount));
+  std::vector<std::vector<std::vector<uint32_t>>> groups(k);
   tbb::parallel_for(0, k, [&](int c) {
-    Billboard& billboard = cloud.billboards[c];
-    const Plane& plane = planes[c];
-    const glm::vec3 e1 = anyPerpendicular(plane.normal);
-    const glm::vec3 e2 = glm::cross(plane.normal, e1);
-    std::vector<glm::vec2> projected;
-    double distanceSum = 0.0;
-    for (uint32_t i : members[c]) {
-      for (const glm::vec3& corner : leaves[i].corners) {
-        const glm::vec3 d = corner - plane.origin;
-        projected.emplace_back(glm::dot(d, e1), glm::dot(d, e2));
-        const float distance = std::abs(glm::dot(d, plane.normal));
-        distanceSum += distance;
-        billboard.maxPlaneDistance = std::max(billboard.maxPlaneDistance, distance);
-      }
-      billboard.projectedLeafArea +=
-          tree.leaves[i].area() * std::abs(glm::dot(plane.normal, leaves[i].normal));
-    }
-    const Rectangle2D rectangle = minimumAreaRectangle(projected);
-    billboard.normal = plane.normal;
-    billboard.axisU = glm::normalize(e1 * rectangle.axis.x + e2 * rectangle.axis.y);
-    billboard.axisV = glm::normalize(glm::cross(plane.normal, billboard.axisU));
-    billboard.center = plane.origin + e1 * rectangle.center.x + e2 * rectangle.center.y;
-    billboard.halfExtents = rectangle.halfExtents;
-    billboard.leaves = members[c];
-    billboard.meanPlaneDistance = float(distanceSum / double(4 * members[c].size()));
+    groups[c] = params.splitGap > 0.0f ? splitIntoGroups(tree, planes[c].normal, members[c], gap)
+                                       : std::vector<std::vector<uint32_t>>{members[c]};
   });
-  double distanceSum = 0.0;
+  std::vector<std::pair<int, const std::vector<uint32_t>*>> pieces;
+  for (int c = 0; c < k; ++c)
+    for (const auto& group : groups[c]) pieces.emplace_back(c, &group);
+  cloud.billboards.resize(pieces.size());
+  tbb::parallel_for(size_t(0), pieces.size(), [&](size_t b) {
+    cloud.billboards[b] = makeBillboard(tree, planes[pieces[b].first], *pieces[b].second);
+  });
+  double distanceSum = 0.0, alignmentSum = 0.0;
   for (const Billboard& billboard : cloud.billboards) {
     distanceSum += double(billboard.meanPlaneDistance) * 4.0 * double(billboard.leaves.size());
     cloud.maxPlaneDistance = std::max(cloud.maxPlaneDistance, billboard.maxPlaneDistance);
     cloud.quadArea += billboard.area();
     cloud.projectedLeafArea += billboard.projectedLeafArea;
+    alignmentSum += billboard.alignmentSum;
   }
   cloud.meanPlaneDistance = float(distanceSum / double(4 * leafCount));
+  cloud.meanAlignment = float(alignmentSum / double(leafCount));
+  cloud.meanLeafLength = float(leafSize / double(leafCount));
   cloud.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return cloud;
 }

@@ -20,6 +20,10 @@ struct ClusteringParams {
   float orientationWeight = 1.0f;  // weight of the leaf-orientation term
   float compactnessWeight = 1.0f;  // weight of the locality term
   int iterations = 20;             // assignment/refit rounds at most (stops when stable)
+  // A cluster's leaves that lie apart on its plane (gap above this many mean leaf lengths) get
+  // billboards of their own, so a plane across the crown is no crown-sized, mostly empty quad;
+  // 0 keeps one billboard per cluster.
+  float splitGap = 0.0f;
 };
 
 // One billboard: a planar rectangle and the leaves it stands for.
@@ -33,6 +37,7 @@ struct Billboard {
   float meanPlaneDistance = 0;   // over the leaves' corners
   float maxPlaneDistance = 0;
   float projectedLeafArea = 0;  // Σ leaf area · |n·n_leaf|
+  float alignmentSum = 0;       // Σ |n·n_leaf| over the leaves
 
   glm::vec3 corner(int i) const;  // CCW seen from +normal: (−,−) (+,−) (+,+) (−,+)
   glm::vec2 toPlane(const glm::vec3& p) const;  // coordinates along axisU, axisV from center
@@ -40,7 +45,7 @@ struct Billboard {
 };
 
 struct BillboardCloud {
-  std::vector<Billboard> billboards;
+  std::vector<Billboard> billboards;  // at least one per cluster (more where clusters split)
   int requestedClusters = 0;
   int iterationsRun = 0;
   double seconds = 0;
@@ -48,6 +53,10 @@ struct BillboardCloud {
   float maxPlaneDistance = 0;
   double quadArea = 0;           // Σ billboard areas
   double projectedLeafArea = 0;  // Σ projected leaf areas
+  // Mean over leaves of |n·n_leaf|: a leaf drawn on its plane covers this share of its area
+  // seen along the plane normal, so coverage falls with it.
+  float meanAlignment = 0;
+  float meanLeafLength = 0;  // mean of 2·max(half extents), the unit of the clustering cost
 };
 
 // Clusters the leaves into params.clusters billboards. Deterministic in `seed` whatever the

@@ -26,6 +26,9 @@ struct CloudParams {
       "clustering: weight of the locality term");
     v("cluster_iterations", clustering.iterations, 1, 1000,
       "clustering: assignment/refit rounds at most (stops when stable)");
+    v("split_gap", clustering.splitGap, 0.0f, 1000.0f,
+      "clustering: a plane's leaves farther apart than this many mean leaf lengths get separate "
+      "billboards (0: one billboard per cluster)");
     v("lod", lod, "three clouds of K, K/3, K/10 billboards switched by projected size (§6)");
     v("lod_near_px", lodNearPixels, 0.01f, 100000.0f,
       "the K cloud while the tree's bounding radius spans at least this many output pixels");

@@ -84,7 +84,7 @@ void writeCoverageTexel(uint8_t* out, const glm::vec3& linearSum, int covered, i
 ImageRgba8 captureLeavesOrthographic(const Tree& tree, const LeafImageSampler& sampler,
                                      const std::vector<uint32_t>& leaves,
                                      const Billboard& billboard, int width, int height,
-                                     int supersample) {
+                                     int supersample, bool fromBack) {
   const int sw = width * supersample, sh = height * supersample;
   std::vector<float> depth(size_t(sw) * sh, -std::numeric_limits<float>::infinity());
   std::vector<glm::vec3> color(size_t(sw) * sh, glm::vec3(0.0f));
@@ -114,15 +114,17 @@ ImageRgba8 captureLeavesOrthographic(const Tree& tree, const LeafImageSampler& s
         std::max(stepU, stepV) / std::abs(facing) *
         std::max(texSize.x * std::abs(leaf.uvMax.x - leaf.uvMin.x) / (2.0f * leaf.halfExtents.x),
                  texSize.y * std::abs(leaf.uvMax.y - leaf.uvMin.y) / (2.0f * leaf.halfExtents.y));
-    const bool back = facing < 0.0f;
+    // The camera looks along −normal (front capture) or +normal (back capture).
+    const bool back = fromBack ? facing > 0.0f : facing < 0.0f;
     for (int y = y0; y <= y1; ++y) {
       for (int x = x0; x <= x1; ++x) {
         const glm::vec3 p = billboard.center +
                             billboard.axisU * (-billboard.halfExtents.x + (x + 0.5f) * stepU) +
                             billboard.axisV * (-billboard.halfExtents.y + (y + 0.5f) * stepV);
         const float t = glm::dot(leaf.normal, leaf.center - p) / facing;
+        const float nearness = fromBack ? -t : t;  // larger: nearer the camera
         const size_t s = size_t(y) * sw + x;
-        if (t <= depth[s]) continue;
+        if (nearness <= depth[s]) continue;
         const glm::vec3 onLeaf = p + billboard.normal * t - leaf.center;
         const float a = glm::dot(onLeaf, leaf.axisU) / leaf.halfExtents.x;
         const float b = glm::dot(onLeaf, leaf.axisV) / leaf.halfExtents.y;
@@ -131,7 +133,7 @@ ImageRgba8 captureLeavesOrthographic(const Tree& tree, const LeafImageSampler& s
             leaf.uvMin + (glm::vec2(a, b) + 1.0f) * 0.5f * (leaf.uvMax - leaf.uvMin);
         const glm::vec4 texel = sampler.sample(leaf.texture, back, uv, footprint);
         if (texel.a < 0.5f) continue;
-        depth[s] = t;
+        depth[s] = nearness;
         color[s] = glm::vec3(texel);
       }
     }

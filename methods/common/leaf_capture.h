@@ -35,14 +35,16 @@ class LeafImageSampler {
 // coverage.
 void writeCoverageTexel(uint8_t* out, const glm::vec3& linearSum, int covered, int samples);
 
-// What an orthographic camera on the +normal side of `billboard` sees of `leaves` (and only
-// them), over the billboard rectangle, at width × height texels with supersample² samples per
-// texel; each leaf alpha-tested at 0.5, front or back image by the side it turns to the camera.
-// Texel colour: the linear mean of covered samples, sRGB-encoded; alpha: the covered fraction.
+// What an orthographic camera on the +normal side of `billboard` (the −normal side when
+// `fromBack`) sees of `leaves` (and only them), over the billboard rectangle, at width × height
+// texels with supersample² samples per texel; each leaf alpha-tested at 0.5, front or back image
+// by the side it turns to the camera. Texel (x, y) is the same plane point from either side, so
+// a back capture is sampled with the front's uv. Texel colour: the linear mean of covered
+// samples, sRGB-encoded; alpha: the covered fraction.
 ImageRgba8 captureLeavesOrthographic(const Tree& tree, const LeafImageSampler& sampler,
                                      const std::vector<uint32_t>& leaves,
                                      const Billboard& billboard, int width, int height,
-                                     int supersample);
+                                     int supersample, bool fromBack = false);
 
 // Positions of rectangles in an atlas: shelves sorted by height, each rectangle inside a slot
 // with `padding` texels on every side, slots aligned to `alignment` texels (so the first

@@ -7,7 +7,6 @@
 #include <glm/geometric.hpp>
 
 #include "common/error.h"
-#include "methods/common/mipmaps.h"
 
 namespace canopy {
 namespace {
@@ -87,29 +86,6 @@ std::vector<ImageRgba8> buildOrientedLeafImages(const Tree& tree, const LeafImag
     dilateTransparentColors(image, 4);
   });
   return images;
-}
-
-gl::Texture uploadLeafImageArray(gl::Device& device, const std::vector<ImageRgba8>& images,
-                                 const char* label, Compression compression) {
-  requireS3tcFor(compression);
-  const int size = images.empty() ? 1 : images[0].width;
-  gl::Texture texture = device.createTexture(
-      {GL_TEXTURE_2D_ARRAY, size, size, static_cast<int>(images.size()),
-       srgbInternalFormat(compression), true, gl::MemoryCategory::kTexture, label});
-  for (size_t layer = 0; layer < images.size(); ++layer) {
-    const std::vector<ImageRgba8> levels = buildCoveragePreservingMips(images[layer]);
-    for (size_t level = 0; level < levels.size(); ++level) {
-      if (compression == Compression::kNone) {
-        device.uploadTextureLayer(texture, static_cast<int>(layer), GL_RGBA, GL_UNSIGNED_BYTE,
-                                  levels[level].pixels.data(), static_cast<int>(level));
-      } else {
-        device.uploadCompressedLevel(texture, static_cast<int>(level), static_cast<int>(layer),
-                                     compressImage(levels[level], compression));
-      }
-    }
-  }
-  gl::setTextureSampling(texture, true, false);
-  return texture;
 }
 
 }  // namespace canopy

@@ -3,11 +3,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "common/gl/device.h"
 #include "common/image.h"
 #include "common/tree.h"
 #include "methods/common/billboard_cloud.h"
-#include "methods/common/dxt.h"
 #include "methods/common/leaf_capture.h"
 
 namespace canopy {
@@ -38,9 +36,5 @@ uint32_t orientedImageCount(size_t leafTextures, const OrientationBins& bins);
 // Supersampled 4×4, alpha = coverage; uv rectangle and aspect from the first leaf of each texture.
 std::vector<ImageRgba8> buildOrientedLeafImages(const Tree& tree, const LeafImageSampler& sampler,
                                                 const OrientationBins& bins, int size);
-
-// Uploads images as one mipmapped sRGB 2D array (coverage-preserving levels).
-gl::Texture uploadLeafImageArray(gl::Device& device, const std::vector<ImageRgba8>& images,
-                                 const char* label, Compression compression = Compression::kNone);
 
 }  // namespace canopy

@@ -8,22 +8,32 @@
 
 namespace canopy {
 
-// A full mip chain (level 0 = `base`) for alpha-tested textures. Colour is averaged in linear
-// space weighted by alpha; each level's alpha is then scaled so that the fraction of texels
-// passing the alpha test matches level 0 (Castaño's coverage-preserving mipmaps). Plain box
-// filtering lets averaged alpha of sparse foliage fall under the threshold, and far billboards
-// vanish.
+// The share of an image's area an alpha test at 0.5 keeps once the texture unit has filtered
+// it: the bilinear reconstruction of alpha sampled 2×2 times per texel (`binary`: the alpha first
+// cut at 0.5, as BC1 stores it, then filtered).
+double alphaTestedArea(const ImageRgba8& image, bool binary);
+
+// A full mip chain (level 0 = `base`, or `base` alone when !mipmaps) for alpha-tested textures
+// whose alpha is coverage. Colour is averaged in linear space weighted by alpha. Every level's
+// alpha, level 0 included, is then scaled so that the area the alpha test keeps after bilinear
+// filtering (as `compression` stores alpha: cut at 0.5 for BC1) equals the covered area, the
+// mean alpha of level 0. Plain box filtering lets the averaged alpha of sparse foliage fall
+// under the threshold and distant billboards vanish; matching the count of passing texels
+// instead of the filtered area still loses the thin parts a bilinear threshold cuts off (and
+// made BC1, whose 1-bit alpha rounds them up, look better than no compression).
 std::vector<ImageRgba8> buildCoveragePreservingMips(const ImageRgba8& base,
-                                                    float alphaThreshold = 0.5f);
+                                                    Compression compression = Compression::kNone,
+                                                    bool mipmaps = true);
 
-}  // namespace canopy
-
-namespace canopy {
-
-// A 2D sRGB texture with the chain above (or level 0 only when !mipmaps), linear filtering,
-// every level block-compressed unless `compression` is kNone.
+// A 2D sRGB texture with the chain above, linear filtering, every level block-compressed unless
+// `compression` is kNone.
 gl::Texture uploadAlphaTestedTexture(gl::Device& device, const ImageRgba8& image, bool mipmaps,
                                      const char* label,
                                      Compression compression = Compression::kNone);
+
+// The same for images of one size as the layers of one sRGB 2D array texture.
+gl::Texture uploadAlphaTestedArray(gl::Device& device, const std::vector<ImageRgba8>& layers,
+                                   bool mipmaps, const char* label,
+                                   Compression compression = Compression::kNone);
 
 }  // namespace canopy

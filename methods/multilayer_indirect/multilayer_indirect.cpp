@@ -2,16 +2,21 @@
 
 #include <tbb/parallel_for.h>
 
+#include <cmath>
+
+#include <fmt/format.h>
+
 #include "common/config.h"
 #include "methods/common/ambient_occlusion.h"
 #include "methods/common/cloud_levels.h"
 #include "methods/common/cloud_params.h"
 #include "methods/common/leaf_capture.h"
-#include "methods/common/leaf_orientations.h"
+#include "methods/common/leaf_images.h"
 #include "methods/common/lod_instances.h"
 #include "methods/common/mesh.h"
 #include "methods/common/mipmaps.h"
 #include "methods/multilayer_indirect/layered_billboard.h"
+#include "methods/multilayer_indirect/list_textures.h"
 
 namespace canopy {
 namespace {
@@ -21,9 +26,7 @@ namespace {
 struct MultilayerParams {
   CloudParams cloud;
   int hashResolution = 32;
-  int maxLayers = 16;
-  std::string sprite = "paper";
-  OrientationBins bins;
+  int maxLayers = 64;
   int leafImageSize = 64;
   float lodFactor = 1.0f;
   int lowResTexelsPerCell = 1;
@@ -31,6 +34,8 @@ struct MultilayerParams {
   int aoRays = 32;
   std::string compression = "none";
   std::string listsPrecision = "float16";
+  bool parallax = false;
+  float parallaxMaxAngle = 70.0f;
   WoodParams wood;
 
   template <class Visitor>
@@ -39,21 +44,25 @@ struct MultilayerParams {
     v("hash_resolution", hashResolution, 1, 1024,
       "hash cells along each billboard's longer side (the memory knob)");
     v("max_layers", maxLayers, 1, 255, "longest list kept per cell (front-most first)");
-    v("sprite", sprite, {"paper", "bounds"}, "point-sprite size: the §4.2 formula or the bounds");
-    bins.visit(v);
-    v("leaf_image_size", leafImageSize, 4, 512, "texels per side of each oriented leaf image");
+    v("leaf_image_size", leafImageSize, 4, 512,
+      "texels per side of each leaf image (front and back per leaf texture)");
     v("lod_factor", lodFactor, 0.0f, 1000.0f,
       "shader LoD: list entries walked = factor × projected hash-texel diagonal (px); 0: all");
     v("lowres_texels_per_cell", lowResTexelsPerCell, 1, 16,
       "low-resolution texture texels per hash cell side");
     v("ambient_occlusion", ambientOcclusion,
-      "Embree AO of the polygonal tree at sprite corners, for lit frames (§5.2)");
+      "Embree AO of the polygonal tree at the leaf corners, for lit frames (§5.2)");
     v("ao_rays", aoRays, 1, 4096, "rays per leaf corner for the ambient occlusion");
     v("compression", compression, {"none", "dxt1", "dxt5"},
       "colour textures: uncompressed, BC1 or BC3 (S3TC)");
     v("lists_precision", listsPrecision, {"float16", "8bit"},
-      "Lists Texture entries: RGBA16F positions, or RGBA8 cell-relative positions and sizes "
-      "with 4-bit AO (half the memory; the paper's Table 1 budgets)");
+      "leaf records: RGBA16F, or RGBA8 (16-bit positions, 8-bit frames) with 4-bit AO");
+    v("parallax", parallax,
+      "beyond the paper: each fragment follows the view ray to the leaf's own plane, so leaves "
+      "show where they are, not where the billboard flattened them, and write their depth");
+    v("parallax_max_angle", parallaxMaxAngle, 0.0f, 89.0f,
+      "parallax: rays up to this angle from the billboard normal find every leaf they cross "
+      "(the billboard and its cells grow by the offsets); steeper rays are bent to it");
     wood.visit(v);
   }
 };
@@ -65,30 +74,41 @@ struct Vertex {
   glm::vec2 uv;        // over the billboard
   glm::ivec4 hash;     // first cell in the hash atlas, cells
   glm::vec2 halfExtents;
-  glm::vec3 tangent;  // the billboard's axisU: with the normal, the frame leaf normals live in
+  glm::vec3 tangent;   // the billboard's axisU: with the normal, the frame records live in
+  int32_t recordBase;  // the billboard's first record
 };
 
 // The asset header's own part.
 struct AssetFields {
   glm::ivec2 hashSize{0};
   int listsHeight = 0;
+  bool wideLists = false;
+  size_t listEntries = 0;
+  size_t records = 0;
+  int recordsHeight = 0;
+  float axisScale = 0.0f;
+  float heightScale = 0.0f;
   size_t leafImages = 0;
-  float positionRange = 0.0f;  // 8-bit lists: the cell-relative position range
-  float maxSpriteSize = 0.0f;  // 8-bit lists: the size quantization's top
+  bool lowResBack = false;
   bool lowResOcclusion = false;
   template <class V>
   void visit(V& v) {
     v("hash_size", hashSize);
     v("lists_height", listsHeight);
+    v("wide_lists", wideLists);
+    v("list_entries", listEntries);
+    v("records", records);
+    v("records_height", recordsHeight);
+    v("axis_scale", axisScale);
+    v("height_scale", heightScale);
     v("leaf_images", leafImages);
-    v("position_range", positionRange);
-    v("max_sprite_size", maxSpriteSize);
+    v("lowres_back", lowResBack);
     v("lowres_occlusion", lowResOcclusion);
   }
 };
 
-constexpr int kListsWidth = 2048;
 constexpr int kFarLevel = 2;  // the K/10 cloud draws the low-resolution texture only (§5.1, §6)
+constexpr float kPi = 3.14159265358979f;
 
 class MultilayerIndirect final : public Method {
  public:
@@ -100,134 +120,72 @@ class MultilayerIndirect final : public Method {
     mLevels = {};
     mLevels.treeBounds = tree.bounds;
     mWood.bake(tree, mParams.wood.levels());
-    const uint32_t imageCount = orientedImageCount(tree.leafTextures.size(), mParams.bins);
-    if (imageCount > 2048) {
-      throwInputError(
-          "multilayer_indirect: {} oriented leaf images (textures × 2 × tilts × rotations) exceed "
-          "2048; "
-          "lower 'rotations' or 'tilts'",
-          imageCount);
-    }
     const auto clouds = buildBillboardCloudFamily(tree, mParams.cloud.clustering,
                                                   mParams.cloud.divisors(), ctx.seed);
-    LayeringParams layering;
-    layering.hashResolution = mParams.hashResolution;
-    layering.maxLayers = mParams.maxLayers;
-    layering.sprite = parseSpriteRule(mParams.sprite);
-    layering.bins = mParams.bins;
     std::vector<const Billboard*> billboards;
     for (const BillboardCloud& cloud : clouds) {
       mLevels.addLevel(billboards.size(), cloud.billboards.size());
       for (const Billboard& billboard : cloud.billboards) billboards.push_back(&billboard);
     }
+    // The far cloud draws its low-resolution texture only: it needs no hash cells or lists.
+    const size_t withLists =
+        mLevels.ranges.size() > kFarLevel ? mLevels.ranges[kFarLevel].first / 6 : billboards.size();
     std::vector<glm::vec4> occlusion;
     if (mParams.ambientOcclusion)
       occlusion = computeLeafCornerOcclusion(tree, mParams.aoRays, ctx.seed);
+    const LeafImageSampler sampler(tree);
+    const LeafImages leafImages =
+        buildLeafImages(tree, sampler, mParams.leafImageSize, packed() ? 256 : 1024);
+    mLeafLayers = leafImages.layers;
     std::vector<LayeredBillboard> layered(billboards.size());
     tbb::parallel_for(size_t(0), billboards.size(), [&](size_t i) {
-      layered[i] = buildLayeredBillboard(tree, *billboards[i], layering,
+      LayeringParams layering;
+      layering.hashResolution = mParams.hashResolution;
+      layering.maxLayers = mParams.maxLayers;
+      layering.maxSlope = mParams.parallax && i < withLists
+                              ? std::tan(mParams.parallaxMaxAngle * kPi / 180.0f)
+                              : 0.0f;
+      layered[i] = buildLayeredBillboard(tree, *billboards[i], leafImages.imageOfLeaf, layering,
                                          mParams.ambientOcclusion ? &occlusion : nullptr);
     });
-    const LeafImageSampler sampler(tree);
-    mLeafImages = buildOrientedLeafImages(tree, sampler, mParams.bins, mParams.leafImageSize);
+    mLists = packListTextures(layered, withLists, packed(), leafImages.count());
 
-    // Hash atlas and lists atlas (§6).
-    std::vector<glm::ivec2> cellSizes;
-    // The far cloud draws its low-resolution texture only: it needs no hash cells or lists.
-    const size_t layeredBillboards =
-        mLevels.ranges.size() > kFarLevel ? mLevels.ranges[kFarLevel].first / 6 : layered.size();
-    for (size_t i = 0; i < layered.size(); ++i)
-      cellSizes.push_back(i < layeredBillboards ? layered[i].cells : glm::ivec2(1));
-    const AtlasLayout hashLayout = packAtlas(cellSizes, 0, 1);
-    mHashSize = {hashLayout.width, hashLayout.height};
-    mHash.assign(size_t(hashLayout.width) * hashLayout.height, 0u);
-    mLists.clear();
-    mAmbient.clear();
-    size_t maxList = 0, dropped = 0, finestEntries = 0;
-    for (size_t i = 0; i < layeredBillboards; ++i) {
-      const LayeredBillboard& l = layered[i];
-      const auto base = static_cast<uint32_t>(mLists.size() / 4);
-      for (const LayerEntry& e : l.entries) {
-        // The image index, negative (−index − 1) when the leaf's normal leans the other way.
-        const float image = e.roll > 0 ? float(e.image) : -float(e.image) - 1.0f;
-        mLists.insert(mLists.end(), {e.position.x, e.position.y, e.size, image});
-        for (int c = 0; c < 4; ++c)
-          mAmbient.push_back(static_cast<uint8_t>(std::lround(e.ambient[c] * 255.0f)));
+    // The low-resolution texture, baked from the layered representation (§5.1), seen from each
+    // side of the billboard; and the AO of what the front sees.
+    std::vector<ImageRgba8> fronts(billboards.size()), backs(billboards.size()),
+        frontOcclusion(billboards.size());
+    tbb::parallel_for(size_t(0), billboards.size() * 2, [&](size_t k) {
+      const size_t i = k % billboards.size();
+      if (k < billboards.size()) {
+        fronts[i] = captureLayered(layered[i], mLeafLayers, mParams.lowResTexelsPerCell, true,
+                                   &frontOcclusion[i]);
+      } else {
+        backs[i] = captureLayered(layered[i], mLeafLayers, mParams.lowResTexelsPerCell, false);
       }
-      for (int y = 0; y < l.cells.y; ++y) {
-        for (int x = 0; x < l.cells.x; ++x) {
-          const size_t cell = size_t(y) * l.cells.x + x;
-          if (l.listLength[cell] == 0) continue;
-          maxList = std::max<size_t>(maxList, l.listLength[cell]);
-          mHash[size_t(hashLayout.origins[i].y + y) * hashLayout.width + hashLayout.origins[i].x +
-                x] = ((base + l.listStart[cell]) << 8) | l.listLength[cell];
-        }
-      }
-      dropped += l.droppedEntries;
-      if (i < clouds[0].billboards.size()) finestEntries += l.entries.size();
-    }
-    if (mLists.size() / 4 >= (1u << 24))
-      throwInputError("multilayer_indirect: more than 2^24 list entries");
-    mListsHeight = static_cast<int>((mLists.size() / 4 + kListsWidth - 1) / kListsWidth);
-    mLists.resize(size_t(kListsWidth) * std::max(mListsHeight, 1) * 4, 0.0f);
-    mAmbient.resize(mLists.size(), 255);
-    mListsHeight = std::max(mListsHeight, 1);
-    if (mParams.listsPrecision == "8bit") quantizeLists(layered, layeredBillboards);
-
-    // The low-resolution texture, baked from the layered representation (§5.1).
-    std::vector<ImageRgba8> lowRes(billboards.size()), lowResOcclusion(billboards.size());
-    tbb::parallel_for(size_t(0), billboards.size(), [&](size_t i) {
-      lowRes[i] = captureLayers(*billboards[i], layered[i], &lowResOcclusion[i]);
     });
-    const ImageAtlas atlas = composeAtlas(lowRes, 4, 8);
-    mLowRes = atlas.image;
+    const ImageAtlas atlas = composeAtlas(fronts, 4, 8);
+    mLowRes = {atlas.image, composeAtlas(backs, 4, 8).image};
     // §5.2 gives the far level its AO in the low-resolution texture's alpha; that alpha is the
     // alpha-tested coverage here (filtered and mipmapped), and AO written into it moves the
     // silhouette, so the AO gets its own single-channel texture at a quarter of the resolution
     // in each axis (AO is smooth; 1/16 of the atlas' texels), laid out like the colour atlas.
-    mLowResOcclusion = {};
-    if (mParams.ambientOcclusion) {
-      constexpr int kFactor = 4;
-      const ImageRgba8 full = composeAtlas(lowResOcclusion, 4, 8).image;
-      mLowResOcclusion = ImageRgba8(std::max(1, (full.width + kFactor - 1) / kFactor),
-                                    std::max(1, (full.height + kFactor - 1) / kFactor));
-      for (int y = 0; y < mLowResOcclusion.height; ++y)
-        for (int x = 0; x < mLowResOcclusion.width; ++x) {
-          int sum = 0, count = 0;
-          for (int dy = 0; dy < kFactor; ++dy)
-            for (int dx = 0; dx < kFactor; ++dx) {
-              const int sx = kFactor * x + dx, sy = kFactor * y + dy;
-              if (sx >= full.width || sy >= full.height) continue;
-              sum += full.at(sx, sy)[0];
-              ++count;
-            }
-          uint8_t* out = mLowResOcclusion.at(x, y);
-          out[0] = out[1] = out[2] = uint8_t((sum + count / 2) / std::max(count, 1));
-          out[3] = 255;
-        }
-    }
-
-    mVertices.clear();
-    mIndices.clear();
-    static constexpr int kU[4] = {0, 1, 1, 0}, kV[4] = {0, 0, 1, 1};
-    for (size_t i = 0; i < billboards.size(); ++i) {
-      const auto base = static_cast<uint32_t>(mVertices.size());
-      for (int c = 0; c < 4; ++c) {
-        mVertices.push_back({billboards[i]->corner(c), billboards[i]->normal, atlas.cornerUv(i, c),
-                             glm::vec2(kU[c], kV[c]),
-                             glm::ivec4(hashLayout.origins[i], layered[i].cells),
-                             billboards[i]->halfExtents, billboards[i]->axisU});
-      }
-      for (uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) mIndices.push_back(base + k);
-    }
+    mLowResOcclusion = mParams.ambientOcclusion
+                           ? quarterResolution(composeAtlas(frontOcclusion, 4, 8).image)
+                           : ImageRgba8();
+    makeVertices(billboards, layered, atlas);
+    size_t finestEntries = 0;
+    for (size_t i = 0; i < clouds[0].billboards.size() && i < withLists; ++i)
+      finestEntries += layered[i].entries.size();
     mReport = {{"clouds", describeClouds(clouds)},
-               {"hash_atlas", {hashLayout.width, hashLayout.height}},
-               {"list_entries", mLists.size() / 4},
+               {"hash_atlas", {mLists.hashSize.x, mLists.hashSize.y}},
+               {"list_entries", mLists.listEntries},
                {"list_entries_finest_level", finestEntries},
-               {"longest_list", maxList},
-               {"dropped_entries", dropped},
-               {"leaf_images", mLeafImages.size()},
-               {"lowres_atlas", {atlas.layout.width, atlas.layout.height}}};
+               {"records", mLists.recordCount},
+               {"longest_list", mLists.longestList},
+               {"dropped_entries", mLists.droppedEntries},
+               {"leaf_images", leafImages.count()},
+               {"lowres_atlas", {atlas.layout.width, atlas.layout.height}},
+               {"parallax_margin", parallaxMargin(billboards, layered, withLists)}};
   }
 
   void upload(gl::Device& device) override {
@@ -237,34 +195,46 @@ class MultilayerIndirect final : public Method {
     mIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mIndices,
                                "billboard indices");
     makeVertexArray();
-    mHashTexture = device.createTexture({GL_TEXTURE_2D, mHashSize.x, mHashSize.y, 1, GL_R32UI,
-                                         false, MemoryCategory::kTexture, "hash atlas"});
-    device.uploadTexture(mHashTexture, GL_RED_INTEGER, GL_UNSIGNED_INT, mHash.data());
-    gl::setTextureSampling(mHashTexture, false, false);
-    if (packed()) {
-      mListsTexture = device.createTexture({GL_TEXTURE_2D, kListsWidth, mListsHeight, 1, GL_RGBA8,
-                                            false, MemoryCategory::kTexture, "lists (8-bit)"});
-      device.uploadTexture(mListsTexture, GL_RGBA, GL_UNSIGNED_BYTE, mListsPacked.data());
-      mAmbientTexture =
-          device.createTexture({GL_TEXTURE_2D, kListsWidth, mListsHeight, 1, GL_RGBA4, false,
-                                MemoryCategory::kTexture, "ambient occlusion (4-bit)"});
-      device.uploadTexture(mAmbientTexture, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4,
-                           mAmbientPacked.data());
+    const auto create = [&](int width, int height, GLenum format, const char* label) {
+      gl::Texture texture = device.createTexture(
+          {GL_TEXTURE_2D, width, height, 1, format, false, MemoryCategory::kTexture, label});
+      return texture;
+    };
+    mHashTexture = create(mLists.hashSize.x, mLists.hashSize.y, GL_R32UI, "hash atlas");
+    device.uploadTexture(mHashTexture, GL_RED_INTEGER, GL_UNSIGNED_INT, mLists.hash.data());
+    if (mLists.wideLists) {
+      mListsTexture = create(kListsWidth, mLists.listsHeight, GL_R32UI, "lists (record indices)");
+      device.uploadTexture(mListsTexture, GL_RED_INTEGER, GL_UNSIGNED_INT, mLists.lists.data());
     } else {
-      mListsTexture = device.createTexture({GL_TEXTURE_2D, kListsWidth, mListsHeight, 1, GL_RGBA16F,
-                                            false, MemoryCategory::kTexture, "lists atlas"});
-      device.uploadTexture(mListsTexture, GL_RGBA, GL_FLOAT, mLists.data());
-      mAmbientTexture = device.createTexture({GL_TEXTURE_2D, kListsWidth, mListsHeight, 1, GL_RGBA8,
-                                              false, MemoryCategory::kTexture,
-                                              "ambient occlusion (indexed like the lists)"});
-      device.uploadTexture(mAmbientTexture, GL_RGBA, GL_UNSIGNED_BYTE, mAmbient.data());
+      const std::vector<uint16_t> narrow(mLists.lists.begin(), mLists.lists.end());
+      mListsTexture = create(kListsWidth, mLists.listsHeight, GL_R16UI, "lists (record indices)");
+      gl::api().PixelStorei(GL_UNPACK_ALIGNMENT, 2);
+      device.uploadTexture(mListsTexture, GL_RED_INTEGER, GL_UNSIGNED_SHORT, narrow.data());
+      gl::api().PixelStorei(GL_UNPACK_ALIGNMENT, 4);
     }
-    gl::setTextureSampling(mListsTexture, false, false);
-    gl::setTextureSampling(mAmbientTexture, false, false);
-    mLeavesTexture = uploadLeafImageArray(device, mLeafImages, "oriented leaf images",
-                                          parseCompression(mParams.compression));
-    mLowResTexture = uploadAlphaTestedTexture(device, mLowRes, true, "low-resolution atlas",
-                                              parseCompression(mParams.compression));
+    const int recordTexels = kRecordsPerRow * kRecordTexels;
+    if (packed()) {
+      mRecordsTexture =
+          create(recordTexels, mLists.recordsHeight, GL_RGBA8, "leaf records (8-bit)");
+      device.uploadTexture(mRecordsTexture, GL_RGBA, GL_UNSIGNED_BYTE, mLists.recordsByte.data());
+      mAmbientTexture = create(kRecordsPerRow, mLists.recordsHeight, GL_RGBA4,
+                               "leaf corner ambient occlusion (4-bit)");
+      device.uploadTexture(mAmbientTexture, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4,
+                           mLists.ambient4.data());
+    } else {
+      mRecordsTexture = create(recordTexels, mLists.recordsHeight, GL_RGBA16F, "leaf records");
+      device.uploadTexture(mRecordsTexture, GL_RGBA, GL_FLOAT, mLists.recordsHalf.data());
+      mAmbientTexture =
+          create(kRecordsPerRow, mLists.recordsHeight, GL_RGBA8, "leaf corner ambient occlusion");
+      device.uploadTexture(mAmbientTexture, GL_RGBA, GL_UNSIGNED_BYTE, mLists.ambient.data());
+    }
+    for (const gl::Texture* texture :
+         {&mHashTexture, &mListsTexture, &mRecordsTexture, &mAmbientTexture})
+      gl::setTextureSampling(*texture, false, false);
+    const Compression compression = parseCompression(mParams.compression);
+    mLeavesTexture = uploadAlphaTestedArray(device, mLeafLayers, true, "leaf images", compression);
+    mLowResTexture =
+        uploadAlphaTestedArray(device, mLowRes, true, "low-resolution atlas", compression);
     if (!mLowResOcclusion.empty()) {
       std::vector<uint8_t> red(size_t(mLowResOcclusion.width) * mLowResOcclusion.height);
       for (size_t i = 0; i < red.size(); ++i) red[i] = mLowResOcclusion.pixels[i * 4];
@@ -277,9 +247,15 @@ class MultilayerIndirect final : public Method {
       device.generateMipmaps(mLowResOcclusionTexture);
       gl::setTextureSampling(mLowResOcclusionTexture, true, false);
     }
+    const gl::ShaderSource& fragment =
+        gl::embeddedShader("methods/multilayer_indirect/multilayer_indirect.frag");
+    mFragmentText = std::string(fragment.text);
+    mFragmentText.insert(mFragmentText.find('\n') + 1,
+                         fmt::format("#define RECORDS_8BIT {}\n#define PARALLAX {}\n",
+                                     packed() ? 1 : 0, mParams.parallax ? 1 : 0));
     mProgram = device.createProgram(
         {gl::embeddedShader("methods/multilayer_indirect/multilayer_indirect.vert"),
-         gl::embeddedShader("methods/multilayer_indirect/multilayer_indirect.frag")});
+         {fragment.path, mFragmentText}});
     mFarProgram =
         device.createProgram({gl::embeddedShader("methods/common/mesh.vert"),
                               gl::embeddedShader("methods/common/alpha_tested_texture.frag")});
@@ -299,15 +275,17 @@ class MultilayerIndirect final : public Method {
       setFrameUniforms(program, frame);
       if (far) {
         program.set("uAtlas", 0);
+        program.set("uBackLayer", 1.0f);
         program.set("uOcclusion", 1);
         program.set("uHasOcclusion", mLowResOcclusionTexture.id() ? 1 : 0);
         g.ActiveTexture(GL_TEXTURE1);
         g.BindTexture(GL_TEXTURE_2D, mLowResOcclusionTexture.id());
         g.ActiveTexture(GL_TEXTURE0);
-        g.BindTexture(GL_TEXTURE_2D, mLowResTexture.id());
+        g.BindTexture(GL_TEXTURE_2D_ARRAY, mLowResTexture.id());
       } else {
         bindLayeredTextures(program);
         program.set("uTargetPixelsPerOutputPixel", frame.targetPixelsPerOutputPixel);
+        program.set("uCameraPosition", frame.cameraPosition);
       }
     });
     g.ActiveTexture(GL_TEXTURE0);
@@ -325,21 +303,28 @@ class MultilayerIndirect final : public Method {
   void save(AssetFolder& asset) const override {
     asset.describe("multilayer_indirect", effectiveParams(), mReport);
     mLevels.save(asset);
-    asset.writeFields(AssetFields{mHashSize, mListsHeight, mLeafImages.size(), mPositionRange,
-                                  mMaxSpriteSize, !mLowResOcclusion.empty()});
-    // What the GPU holds is what is stored: the 8-bit lists replace the float ones on disk too.
-    if (packed()) {
-      asset.writeBlob("lists_8bit.bin", mListsPacked);
-      asset.writeBlob("ambient_4bit.bin", mAmbientPacked);
+    asset.writeFields(AssetFields{mLists.hashSize, mLists.listsHeight, mLists.wideLists,
+                                  mLists.listEntries, mLists.recordCount, mLists.recordsHeight,
+                                  mLists.axisScale, mLists.heightScale, mLeafLayers.size() / 2,
+                                  mLowRes.size() > 1, !mLowResOcclusion.empty()});
+    // What the GPU holds is what is stored: 16-bit list entries where they fit, 8-bit records.
+    if (mLists.wideLists) {
+      asset.writeBlob("lists.bin", mLists.lists);
     } else {
-      asset.writeBlob("lists.bin", mLists);
-      asset.writeBlob("ambient.bin", mAmbient);
+      asset.writeBlob("lists.bin", std::vector<uint16_t>(mLists.lists.begin(), mLists.lists.end()));
+    }
+    if (packed()) {
+      asset.writeBlob("records_8bit.bin", mLists.recordsByte);
+      asset.writeBlob("ambient_4bit.bin", mLists.ambient4);
+    } else {
+      asset.writeBlob("records.bin", mLists.recordsHalf);
+      asset.writeBlob("ambient.bin", mLists.ambient);
     }
     asset.writeBlob("vertices.bin", mVertices);
     asset.writeBlob("indices.bin", mIndices);
-    asset.writeBlob("hash.bin", mHash);
-    asset.writeImages("leaf_image_{}.png", mLeafImages);
-    asset.writeImage("lowres.png", mLowRes);
+    asset.writeBlob("hash.bin", mLists.hash);
+    asset.writeImages("leaf_image_{}.png", mLeafLayers);
+    asset.writeImages("lowres_{}.png", mLowRes);
     if (!mLowResOcclusion.empty()) asset.writeImage("lowres_occlusion.png", mLowResOcclusion);
     mWood.save(asset);
     asset.writeHeader();
@@ -350,45 +335,52 @@ class MultilayerIndirect final : public Method {
     AssetFields fields;
     asset.readFields(fields);
     const std::string folder = asset.folder().string();
-    mHashSize = fields.hashSize;
-    mListsHeight = fields.listsHeight;
+    ListTextures& l = mLists;
+    l = {};
+    l.eightBit = packed();
+    l.hashSize = fields.hashSize;
+    l.listsHeight = fields.listsHeight;
+    l.wideLists = fields.wideLists;
+    l.listEntries = fields.listEntries;
+    l.recordCount = fields.records;
+    l.recordsHeight = fields.recordsHeight;
+    l.axisScale = fields.axisScale;
+    l.heightScale = fields.heightScale;
     mVertices = asset.readBlobAs<Vertex>("vertices.bin");
     mIndices = asset.readBlobAs<uint32_t>("indices.bin");
-    mHash = asset.readBlobAs<uint32_t>("hash.bin");
-    mPositionRange = fields.positionRange;
-    mMaxSpriteSize = fields.maxSpriteSize;
-    if (packed()) {
-      mListsPacked = asset.readBlobAs<uint8_t>("lists_8bit.bin");
-      mAmbientPacked = asset.readBlobAs<uint16_t>("ambient_4bit.bin");
-      if (mAmbientPacked.size() * 4 != mListsPacked.size())
-        throwInputError("{}: 8-bit lists and AO blobs differ in length", folder);
-      // The float lists stand in for sizes and image checks only: images from the packed ones.
-      mLists.assign(mListsPacked.size(), 0.0f);
-      for (size_t i = 3; i < mLists.size(); i += 4) mLists[i] = float(mListsPacked[i] & 0x7f);
-      mAmbient.clear();
+    l.hash = asset.readBlobAs<uint32_t>("hash.bin");
+    if (l.wideLists) {
+      l.lists = asset.readBlobAs<uint32_t>("lists.bin");
     } else {
-      mLists = asset.readBlobAs<float>("lists.bin");
-      mAmbient = asset.readBlobAs<uint8_t>("ambient.bin");
+      const auto narrow = asset.readBlobAs<uint16_t>("lists.bin");
+      l.lists.assign(narrow.begin(), narrow.end());
     }
-    mLeafImages = asset.readImages("leaf_image_{}.png", fields.leafImages);
-    mLowRes = asset.readImage("lowres.png");
+    const size_t recordTexels =
+        size_t(kRecordsPerRow) * kRecordTexels * std::max(l.recordsHeight, 0);
+    const size_t ambientTexels = size_t(kRecordsPerRow) * std::max(l.recordsHeight, 0);
+    bool sizesMatch = true;
+    if (packed()) {
+      l.recordsByte = asset.readBlobAs<uint8_t>("records_8bit.bin");
+      l.ambient4 = asset.readBlobAs<uint16_t>("ambient_4bit.bin");
+      sizesMatch = l.recordsByte.size() == recordTexels * 4 && l.ambient4.size() == ambientTexels;
+    } else {
+      l.recordsHalf = asset.readBlobAs<float>("records.bin");
+      l.ambient = asset.readBlobAs<uint8_t>("ambient.bin");
+      sizesMatch =
+          l.recordsHalf.size() == recordTexels * 4 && l.ambient.size() == ambientTexels * 4;
+    }
+    mLeafLayers = asset.readImages("leaf_image_{}.png", fields.leafImages * 2);
+    mLowRes = asset.readImages("lowres_{}.png", fields.lowResBack ? 2 : 1);
     mLowResOcclusion =
         fields.lowResOcclusion ? asset.readImage("lowres_occlusion.png") : ImageRgba8();
-    if (mHashSize.x < 0 || mHashSize.y < 0 || mListsHeight < 1 ||
-        mHash.size() != size_t(mHashSize.x) * mHashSize.y ||
-        mLists.size() != size_t(kListsWidth) * mListsHeight * 4) {
-      throwInputError("{}: hash or lists blob has the wrong size", folder);
+    if (!sizesMatch || l.hashSize.x < 1 || l.hashSize.y < 1 || l.listsHeight < 1 ||
+        l.recordsHeight < 1 || l.recordCount > size_t(kRecordsPerRow) * l.recordsHeight ||
+        l.hash.size() != size_t(l.hashSize.x) * l.hashSize.y ||
+        l.lists.size() != size_t(kListsWidth) * l.listsHeight || l.listEntries > l.lists.size()) {
+      throwInputError("{}: hash, lists or records blob has the wrong size", folder);
     }
-    for (uint32_t packed : mHash) {
-      if (packed != 0 && size_t(packed >> 8) + (packed & 255u) > mLists.size() / 4)
-        throwInputError("{}: hash cell points past the lists", folder);
-    }
-    for (size_t i = 3; i < mLists.size(); i += 4) {
-      const float image = mLists[i] < 0.0f ? -mLists[i] - 1.0f : mLists[i];
-      if (image >= float(mLeafImages.size()) + 0.5f)
-        throwInputError("{}: list entry names a missing leaf image", folder);
-    }
-    validateIndices(mIndices, mVertices.size(), asset.folder().string());
+    validateLoaded(folder);
+    validateIndices(mIndices, mVertices.size(), folder);
     mLevels.load(asset, mIndices.size());
     mWood.load(asset);
     asset.finishReading();
@@ -397,96 +389,82 @@ class MultilayerIndirect final : public Method {
  private:
   bool packed() const { return mParams.listsPrecision == "8bit"; }
 
-  // lists_precision "8bit": each entry's position relative to its own hash cell (in cells) and
-  // its size as a fraction of the largest, in 8 bits; the image index in 8 bits; AO in 4 bits.
-  void quantizeLists(const std::vector<LayeredBillboard>& layered, size_t layeredBillboards) {
-    const size_t entries = mLists.size() / 4;
-    std::vector<glm::vec2> relative(entries, glm::vec2(0.5f));
-    mPositionRange = 0.0f;
-    mMaxSpriteSize = 1e-12f;
-    size_t base = 0;
-    for (size_t i = 0; i < layeredBillboards; ++i) {
-      const LayeredBillboard& l = layered[i];
-      const glm::vec2 half = l.cellSize * glm::vec2(l.cells) * 0.5f;
-      for (int y = 0; y < l.cells.y; ++y) {
-        for (int x = 0; x < l.cells.x; ++x) {
-          const size_t cell = size_t(y) * l.cells.x + x;
-          for (uint32_t k = 0; k < l.listLength[cell]; ++k) {
-            const size_t e = base + l.listStart[cell] + k;
-            const glm::vec2 origin = -half + glm::vec2(x, y) * l.cellSize;
-            relative[e] = (glm::vec2(mLists[e * 4], mLists[e * 4 + 1]) - origin) / l.cellSize;
-            mPositionRange = std::max({mPositionRange, -relative[e].x, -relative[e].y,
-                                       relative[e].x - 1.0f, relative[e].y - 1.0f});
-          }
-        }
-      }
-      base += l.entries.size();
+  // The largest growth of a layered billboard's rectangle for parallax (0 without), in units of
+  // the billboards' mean half extent, for the report.
+  static float parallaxMargin(const std::vector<const Billboard*>& billboards,
+                              const std::vector<LayeredBillboard>& layered, size_t withLists) {
+    float margin = 0.0f;
+    for (size_t i = 0; i < withLists; ++i) {
+      const glm::vec2 grown = layered[i].halfExtents - billboards[i]->halfExtents;
+      margin = std::max({margin, grown.x, grown.y});
     }
-    for (size_t e = 0; e < entries; ++e)
-      mMaxSpriteSize = std::max(mMaxSpriteSize, mLists[e * 4 + 2]);
-    const auto unorm = [](float v) {
-      return uint8_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
-    };
-    mListsPacked.assign(mLists.size(), 0);
-    mAmbientPacked.assign(mLists.size() / 4, 0xffff);
-    for (size_t e = 0; e < entries; ++e) {
-      const float stored = mLists[e * 4 + 3];
-      const bool leansBack = stored < 0.0f;
-      const float image = leansBack ? -stored - 1.0f : stored;
-      if (image > 127.0f)
-        throwInputError(
-            "multilayer_indirect: lists_precision \"8bit\" holds at most 128 leaf images (lower "
-            "'rotations' or 'tilts')");
-      const glm::vec2 q = (relative[e] + mPositionRange) / (1.0f + 2.0f * mPositionRange);
-      mListsPacked[e * 4] = unorm(q.x);
-      mListsPacked[e * 4 + 1] = unorm(q.y);
-      mListsPacked[e * 4 + 2] = std::max<uint8_t>(1, unorm(mLists[e * 4 + 2] / mMaxSpriteSize));
-      mListsPacked[e * 4 + 3] = uint8_t(uint8_t(std::lround(image)) | (leansBack ? 0x80 : 0));
-      uint16_t word = 0;
-      for (int c = 0; c < 4; ++c)
-        word = uint16_t(word << 4 | uint16_t(std::lround(mAmbient[e * 4 + c] / 255.0f * 15.0f)));
-      mAmbientPacked[e] = word;
-    }
+    return margin;
   }
 
-  // What the full walk shows from the billboard's front, at lowres_texels_per_cell texels per
-  // hash cell, 4×4 samples per texel: colour (linear mean) and coverage.
-  // `occlusion` (optional) gets the mean AO of the leaves hit, 1 where nothing is.
-  ImageRgba8 captureLayers(const Billboard& billboard, const LayeredBillboard& layered,
-                           ImageRgba8* occlusion = nullptr) const {
-    constexpr int kSamples = 4;
-    const glm::ivec2 size = layered.cells * mParams.lowResTexelsPerCell;
-    ImageRgba8 image(size.x, size.y);
-    if (occlusion) *occlusion = ImageRgba8(size.x, size.y);
-    for (int y = 0; y < size.y; ++y) {
-      for (int x = 0; x < size.x; ++x) {
-        glm::vec3 sum(0.0f);
-        float ambient = 0.0f;
-        int covered = 0;
-        for (int sy = 0; sy < kSamples; ++sy) {
-          for (int sx = 0; sx < kSamples; ++sx) {
-            const glm::vec2 unit((x + (sx + 0.5f) / kSamples) / size.x,
-                                 (y + (sy + 0.5f) / kSamples) / size.y);
-            const glm::vec2 point = (unit * 2.0f - 1.0f) * billboard.halfExtents;
-            const auto hit = walkLayers(layered, billboard, mLeafImages, mParams.bins, point, true);
-            if (!hit) continue;
-            sum += glm::vec3(srgbToLinear(hit->color.r), srgbToLinear(hit->color.g),
-                             srgbToLinear(hit->color.b));
-            const glm::vec4& corners = layered.entries[hit->entry].ambient;
-            ambient += 0.25f * (corners.x + corners.y + corners.z + corners.w);
-            ++covered;
-          }
-        }
-        writeCoverageTexel(image.at(x, y), sum, covered, kSamples * kSamples);
-        if (occlusion) {
-          uint8_t* out = occlusion->at(x, y);
-          const float value = covered ? ambient / float(covered) : 1.0f;
-          out[0] = out[1] = out[2] = uint8_t(std::lround(255.0f * value));
-          out[3] = image.at(x, y)[3];
-        }
-      }
+  // A load checks every index the shader follows: hash cells into the lists, list entries into
+  // their billboard's records, records into the leaf images.
+  void validateLoaded(const std::string& folder) const {
+    const ListTextures& l = mLists;
+    for (uint32_t word : l.hash) {
+      if (word != 0 && size_t(word >> 8) + (word & 255u) > l.listEntries)
+        throwInputError("{}: hash cell points past the lists", folder);
     }
-    return image;
+    for (size_t e = 0; e < l.listEntries; ++e) {
+      if (l.lists[e] >= l.recordCount)
+        throwInputError("{}: list entry names a missing leaf record", folder);
+    }
+    for (const Vertex& v : mVertices) {
+      if (v.recordBase < 0 || size_t(v.recordBase) > l.recordCount)
+        throwInputError("{}: billboard names a missing leaf record", folder);
+    }
+    for (size_t r = 0; r < l.recordCount; ++r) {
+      if (decodeRecord(l, r, glm::vec2(1.0f)).image >= mLeafLayers.size() / 2)
+        throwInputError("{}: leaf record names a missing leaf image", folder);
+    }
+    if (mLowRes.size() == 2 &&
+        (mLowRes[1].width != mLowRes[0].width || mLowRes[1].height != mLowRes[0].height))
+      throwInputError("{}: lowres_1.png is not the size of lowres_0.png", folder);
+  }
+
+  static ImageRgba8 quarterResolution(const ImageRgba8& full) {
+    constexpr int kFactor = 4;
+    ImageRgba8 out(std::max(1, (full.width + kFactor - 1) / kFactor),
+                   std::max(1, (full.height + kFactor - 1) / kFactor));
+    for (int y = 0; y < out.height; ++y)
+      for (int x = 0; x < out.width; ++x) {
+        int sum = 0, count = 0;
+        for (int dy = 0; dy < kFactor; ++dy)
+          for (int dx = 0; dx < kFactor; ++dx) {
+            const int sx = kFactor * x + dx, sy = kFactor * y + dy;
+            if (sx >= full.width || sy >= full.height) continue;
+            sum += full.at(sx, sy)[0];
+            ++count;
+          }
+        uint8_t* texel = out.at(x, y);
+        texel[0] = texel[1] = texel[2] = uint8_t((sum + count / 2) / std::max(count, 1));
+        texel[3] = 255;
+      }
+    return out;
+  }
+
+  void makeVertices(const std::vector<const Billboard*>& billboards,
+                    const std::vector<LayeredBillboard>& layered, const ImageAtlas& atlas) {
+    mVertices.clear();
+    mIndices.clear();
+    static constexpr int kU[4] = {0, 1, 1, 0}, kV[4] = {0, 0, 1, 1};
+    for (size_t i = 0; i < billboards.size(); ++i) {
+      const Billboard& b = *billboards[i];
+      const glm::vec2 half = layered[i].halfExtents;  // grown for parallax
+      const auto base = static_cast<uint32_t>(mVertices.size());
+      for (int c = 0; c < 4; ++c) {
+        const glm::vec3 corner = b.center + b.axisU * ((2.0f * kU[c] - 1.0f) * half.x) +
+                                 b.axisV * ((2.0f * kV[c] - 1.0f) * half.y);
+        mVertices.push_back({corner, b.normal, atlas.cornerUv(i, c), glm::vec2(kU[c], kV[c]),
+                             glm::ivec4(mLists.hashOrigins[i], layered[i].cells), half, b.axisU,
+                             static_cast<int32_t>(mLists.recordBase[i])});
+      }
+      for (uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) mIndices.push_back(base + k);
+    }
   }
 
   void makeVertexArray() {
@@ -498,15 +476,19 @@ class MultilayerIndirect final : public Method {
       g.VertexAttribPointer(location, components, GL_FLOAT, GL_FALSE, sizeof(Vertex),
                             reinterpret_cast<const void*>(offset));
     };
+    const auto integer = [&](GLuint location, GLint components, size_t offset) {
+      g.EnableVertexAttribArray(location);
+      g.VertexAttribIPointer(location, components, GL_INT, sizeof(Vertex),
+                             reinterpret_cast<const void*>(offset));
+    };
     attribute(0, 3, offsetof(Vertex, position));
     attribute(1, 3, offsetof(Vertex, normal));
     attribute(2, 2, offsetof(Vertex, lowResUv));
     attribute(3, 2, offsetof(Vertex, uv));
-    g.EnableVertexAttribArray(8);
-    g.VertexAttribIPointer(8, 4, GL_INT, sizeof(Vertex),
-                           reinterpret_cast<const void*>(offsetof(Vertex, hash)));
+    integer(8, 4, offsetof(Vertex, hash));
     attribute(9, 2, offsetof(Vertex, halfExtents));
     attribute(10, 3, offsetof(Vertex, tangent));
+    integer(11, 1, offsetof(Vertex, recordBase));
     g.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, mIbo.id());
     g.BindVertexArray(0);
     g.BindBuffer(GL_ARRAY_BUFFER, 0);
@@ -516,27 +498,22 @@ class MultilayerIndirect final : public Method {
     const gl::Api& g = gl::api();
     program.set("uHash", 0);
     program.set("uLists", 1);
-    program.set("uLeaves", 2);
-    program.set("uLowRes", 3);
-    program.set("uAmbientOcclusion", 4);
-    program.set("uListsWidth", kListsWidth);
-    program.set("uImagesPerSide", mParams.bins.tilts * mParams.bins.rotations);
-    program.set("uRotations", mParams.bins.rotations);
-    program.set("uTilts", mParams.bins.tilts);
-    program.set("uLodFactor", mParams.lodFactor);
-    program.set("uListsPacked", packed() ? 1 : 0);
-    program.set("uPositionRange", mPositionRange);
-    program.set("uMaxSpriteSize", mMaxSpriteSize);
-    program.set("uLowResOcclusion", 5);
+    program.set("uRecords", 2);
+    program.set("uLeaves", 3);
+    program.set("uLowRes", 4);
+    program.set("uAmbientOcclusion", 5);
+    program.set("uLowResOcclusion", 6);
     program.set("uHasLowResOcclusion", mLowResOcclusionTexture.id() ? 1 : 0);
-    g.ActiveTexture(GL_TEXTURE5);
-    g.BindTexture(GL_TEXTURE_2D, mLowResOcclusionTexture.id());
-    const std::pair<GLenum, GLuint> units[] = {{GL_TEXTURE_2D, mHashTexture.id()},
-                                               {GL_TEXTURE_2D, mListsTexture.id()},
-                                               {GL_TEXTURE_2D_ARRAY, mLeavesTexture.id()},
-                                               {GL_TEXTURE_2D, mLowResTexture.id()},
-                                               {GL_TEXTURE_2D, mAmbientTexture.id()}};
-    for (GLenum unit = 0; unit < 5; ++unit) {
+    program.set("uLodFactor", mParams.lodFactor);
+    program.set("uAxisScale", mLists.axisScale);
+    program.set("uHeightScale", mLists.heightScale);
+    program.set("uMaxSlope", std::tan(mParams.parallaxMaxAngle * kPi / 180.0f));
+    const std::pair<GLenum, GLuint> units[] = {
+        {GL_TEXTURE_2D, mHashTexture.id()},           {GL_TEXTURE_2D, mListsTexture.id()},
+        {GL_TEXTURE_2D, mRecordsTexture.id()},        {GL_TEXTURE_2D_ARRAY, mLeavesTexture.id()},
+        {GL_TEXTURE_2D_ARRAY, mLowResTexture.id()},   {GL_TEXTURE_2D, mAmbientTexture.id()},
+        {GL_TEXTURE_2D, mLowResOcclusionTexture.id()}};
+    for (GLenum unit = 0; unit < 7; ++unit) {
       g.ActiveTexture(GL_TEXTURE0 + unit);
       g.BindTexture(units[unit].first, units[unit].second);
     }
@@ -547,23 +524,15 @@ class MultilayerIndirect final : public Method {
   CloudLevels mLevels;
   std::vector<Vertex> mVertices;
   std::vector<uint32_t> mIndices;
-  glm::ivec2 mHashSize{1, 1};
-  std::vector<uint32_t> mHash;
-  int mListsHeight = 1;
-  std::vector<float> mLists;
-  std::vector<uint8_t> mAmbient;  // RGBA8 per list entry: ambient term at the sprite's corners
-  // lists_precision "8bit": the same entries quantized (RGBA8) and the AO in 4 bits a corner.
-  std::vector<uint8_t> mListsPacked;
-  std::vector<uint16_t> mAmbientPacked;
-  float mPositionRange = 0.0f;  // packed positions span [-range, 1 + range] cells
-  float mMaxSpriteSize = 0.0f;  // packed sizes are fractions of this (plane units)
-  std::vector<ImageRgba8> mLeafImages;
-  ImageRgba8 mLowRes;
-  ImageRgba8 mLowResOcclusion;  // AO of the low-resolution atlas at half its resolution (R)
+  ListTextures mLists;
+  std::vector<ImageRgba8> mLeafLayers;  // leaf image i: front 2i, back 2i + 1
+  std::vector<ImageRgba8> mLowRes;      // the low-resolution atlas seen from the front, the back
+  ImageRgba8 mLowResOcclusion;          // AO of the low-resolution atlas at a quarter (R)
+  std::string mFragmentText;            // the fragment shader with its variant's defines
   gl::Buffer mVbo, mIbo;
   gl::VertexArray mVao;
-  gl::Texture mHashTexture, mListsTexture, mLeavesTexture, mLowResTexture, mAmbientTexture,
-      mLowResOcclusionTexture;
+  gl::Texture mHashTexture, mListsTexture, mRecordsTexture, mLeavesTexture, mLowResTexture,
+      mAmbientTexture, mLowResOcclusionTexture;
   gl::Program mProgram, mFarProgram;
   LodInstances mLod;
   WoodRenderer mWood;

@@ -3,115 +3,152 @@
 // names a list of leaf fragments; walk it from the end facing the viewer until an opaque leaf
 // texel; evaluate at most a number of entries that falls with the projected size of a hash texel
 // (§5.1) and take the missing leaves from one fetch of the low-resolution texture.
+// A list entry names a leaf record: the leaf's centre, height and frame in the billboard's frame.
+// The fragment's plane point is mapped into the leaf's own (s, t) through that frame, so a leaf
+// shows its true outline and the side it turns to the viewer. With PARALLAX the point is first
+// moved along the view ray to the leaf's plane (exact ray–leaf intersection), and the fragment
+// takes the depth of the leaf point it shows.
+// Defined before this line by the method: RECORDS_8BIT (0/1), PARALLAX (0/1).
 in vec3 vNormal;
 in vec2 vUv;
 in vec2 vLowResUv;
 flat in ivec4 vHash;
 flat in vec2 vHalfExtents;
 flat in vec3 vTangent;
+flat in int vRecordBase;
+flat in float vScale;
 
 uniform usampler2D uHash;        // R32UI: (list start << 8) | list length, 0 when empty
-uniform sampler2D uLists;        // RGBA16F: leaf position (xy, plane units), image side, image
-uniform sampler2DArray uLeaves;  // oriented leaf images, sRGB
-uniform sampler2D uLowRes;       // the layered representation, captured at low resolution
-uniform sampler2D uAmbientOcclusion;  // RGBA8 like the lists: ambient term at the sprite's corners
-uniform int uListsWidth;
-uniform int uImagesPerSide;      // tilts × rotations: offset between front and back images
-uniform int uRotations;          // orientation bins of the Leaves Texture
-uniform int uTilts;
+uniform usampler2D uLists;       // R16UI/R32UI: record index relative to the billboard's first
+uniform sampler2D uRecords;      // three texels a record (list_textures.h)
+uniform sampler2DArray uLeaves;  // leaf images, sRGB: image i front at 2i, back at 2i + 1
+uniform sampler2DArray uLowRes;  // the layered representation at low resolution: front, back
+uniform sampler2D uAmbientOcclusion;  // per record: ambient term at the leaf's four corners
 uniform float uLodFactor;        // entries = factor × projected hash-texel diagonal (px); 0: all
 uniform float uTargetPixelsPerOutputPixel;  // supersampling: derivatives count target pixels
+uniform vec3 uCameraPosition;
+uniform mat4 uViewProjection;
+uniform float uAxisScale;    // 8-bit records: range of the frame components
+uniform float uHeightScale;  // 8-bit records: range of the heights
+uniform float uMaxSlope;     // parallax: steeper rays are bent to this in-plane slope
 #include "methods/common/lighting.glsl"
+#ifndef CANOPY_LIT
+in vec3 vWorldPosition;  // lighting.glsl declares it for lit frames
+#endif
 uniform sampler2D uLowResOcclusion;  // AO over the low-resolution atlas (R)
 uniform int uHasLowResOcclusion;
-uniform int uListsPacked;        // 1: RGBA8 lists (position in its cell, size fraction, image)
-uniform float uPositionRange;    // packed positions span [-range, 1 + range] cells
-uniform float uMaxSpriteSize;    // packed sizes are fractions of it (plane units)
 
 out vec4 outColor;
 
-// Albedo, or two-sided Lambert (normal facing the viewer) whose ambient term is scaled by the
-// ambient occlusion (§5.2).
-vec3 shade(vec3 albedo, float occlusion, vec3 normal) { return albedo * lighting(normal, occlusion); }
+const int kRecordsPerRow = 1024;
+const int kListsWidth = 4096;
 
-// The normal of a leaf drawn with oriented image `index` (relative to the billboard's front):
-// in the billboard frame it leans from the billboard normal by the bin's mean foreshortening,
-// across the leaf's axis, to the side `roll` says (§5.2 relighting, flat leaves). Returned facing
-// the viewer's side of the leaf.
-vec3 leafNormal(int index, float roll, bool fromFront) {
-  int rotation = index % uRotations;
-  int tilt = (index / uRotations) % uTilts;
-  bool back = (index / uImagesPerSide) % 2 == 1;
-  float angle = float(rotation) * 6.28318530718 / float(uRotations);
-  vec2 across = vec2(-sin(angle), cos(angle));
-  float facing = (float(tilt) + 0.5) / float(uTilts);
-  vec3 local = vec3(roll * sqrt(max(1.0 - facing * facing, 0.0)) * across, back ? -facing : facing);
-  vec3 n = normalize(vNormal);
-  vec3 t = normalize(vTangent - dot(vTangent, n) * n);
-  vec3 leaf = normalize(local.x * t + local.y * cross(n, t) + local.z * n);
-  return ((dot(leaf, n) >= 0.0) == fromFront) ? leaf : -leaf;
+struct Record {
+  vec2 center;
+  float height;
+  vec3 axisU;  // the leaf's axes times its half extents, in the billboard frame
+  vec3 axisV;
+  float image;
+};
+
+Record fetchRecord(int r) {
+  ivec2 at = ivec2(3 * (r % kRecordsPerRow), r / kRecordsPerRow);
+  vec4 t0 = texelFetch(uRecords, at, 0);
+  vec4 t1 = texelFetch(uRecords, at + ivec2(1, 0), 0);
+  vec4 t2 = texelFetch(uRecords, at + ivec2(2, 0), 0);
+  Record record;
+#if RECORDS_8BIT
+  vec2 words = vec2(t0.x * 65280.0 + t0.y * 255.0, t0.z * 65280.0 + t0.w * 255.0);
+  record.center = (words / 65535.0 * 2.0 - 1.0) * vHalfExtents;
+  vec4 s1 = (t1 * 255.0 - 128.0) / 127.0;
+  vec3 s2 = (t2.xyz * 255.0 - 128.0) / 127.0;
+  record.axisU = vec3(s1.xy, s2.y) * uAxisScale;
+  record.axisV = vec3(s1.zw, s2.z) * uAxisScale;
+  record.height = s2.x * uHeightScale;
+  record.image = floor(t2.w * 255.0 + 0.5);
+#else
+  record.center = t0.xy;
+  record.height = t0.z;
+  record.image = floor(t0.w + 0.5);
+  record.axisU = vec3(t1.xy, t2.x);
+  record.axisV = vec3(t1.zw, t2.y);
+#endif
+  return record;
 }
+
+vec3 shade(vec3 albedo, float occlusion, vec3 normal) { return albedo * lighting(normal, occlusion); }
 
 void main() {
   vec2 grid = vUv * vec2(vHash.zw);
+  vec2 plane = (vUv * 2.0 - 1.0) * vHalfExtents;
+  vec2 planeDx = dFdx(plane), planeDy = dFdy(plane);
+  float pixelsPerCell = 1.0 / max(max(length(dFdx(grid)), length(dFdy(grid))), 1e-6) /
+                        uTargetPixelsPerOutputPixel;  // output pixels, as every LoD decision
   ivec2 cell = clamp(ivec2(floor(grid)), ivec2(0), vHash.zw - 1);
   uint cellWord = texelFetch(uHash, vHash.xy + cell, 0).r;
   if (cellWord == 0u) discard;
   int start = int(cellWord >> 8u);
   int listLength = int(cellWord & 255u);
-  vec2 plane = (vUv * 2.0 - 1.0) * vHalfExtents;
-  vec2 planeDx = dFdx(plane), planeDy = dFdy(plane);
   int budget = listLength;
-  if (uLodFactor > 0.0) {
-    // In output pixels, as every LoD decision (FrameContext), whatever the supersampling.
-    float pixelsPerCell = 1.0 / max(max(length(dFdx(grid)), length(dFdy(grid))), 1e-6) /
-                          uTargetPixelsPerOutputPixel;
+  if (uLodFactor > 0.0)
     budget = min(listLength, int(ceil(uLodFactor * 1.41421356 * pixelsPerCell)));
-  }
-  bool fromFront = gl_FrontFacing;  // billboards are counter-clockwise seen from their front
+
+  // The billboard frame in world space and the direction towards the viewer in it.
+  vec3 n = normalize(vNormal);
+  vec3 t = normalize(vTangent - dot(vTangent, n) * n);
+  vec3 b = cross(n, t);
+  vec3 toViewer = uCameraPosition - vWorldPosition;
+  vec3 viewer = vec3(dot(toViewer, t), dot(toViewer, b), dot(toViewer, n));
+  bool fromFront = viewer.z > 0.0;
+  vec2 slope = vec2(0.0);
+#if PARALLAX
+  // A point at height z along the ray through this fragment lies at plane point plane + z·slope.
+  slope = clamp(viewer.xy / (fromFront ? max(viewer.z, 1e-6) : min(viewer.z, -1e-6)),
+                -uMaxSlope, uMaxSlope);
+#endif
   for (int i = 0; i < budget; ++i) {
     int k = start + (fromFront ? i : listLength - 1 - i);
-    vec4 entry = texelFetch(uLists, ivec2(k % uListsWidth, k / uListsWidth), 0);
-    if (uListsPacked != 0) {  // back to plane units
-      vec2 cellSize = 2.0 * vHalfExtents / vec2(vHash.zw);
-      vec2 inCell = entry.xy * (1.0 + 2.0 * uPositionRange) - uPositionRange;
-      float packedImage = floor(entry.w * 255.0 + 0.5);  // bit 7: the leaf leans back
-      float image = mod(packedImage, 128.0);
-      entry = vec4(-vHalfExtents + (vec2(cell) + inCell) * cellSize, entry.z * uMaxSpriteSize,
-                   packedImage >= 128.0 ? -image - 1.0 : image);
-    }
-    float roll = entry.w < 0.0 ? -1.0 : 1.0;
-    entry.w = entry.w < 0.0 ? -entry.w - 1.0 : entry.w;
-    vec2 local = (plane - entry.xy) / entry.z + 0.5;
-    if (any(lessThan(local, vec2(0.0))) || any(greaterThanEqual(local, vec2(1.0)))) continue;
-    float image = entry.w;
-    if (!fromFront) {  // seen from behind: the other side of the same orientation
-      int perSide = uImagesPerSide;
-      int index = int(image + 0.5);
-      bool back = (index / perSide) % 2 == 1;
-      image = float(back ? index - perSide : index + perSide);
-    }
-    vec4 texel = textureGrad(uLeaves, vec3(local, image), planeDx / entry.z, planeDy / entry.z);
-    if (texel.a >= 0.5) {
-#ifdef CANOPY_LIT
-      vec4 corners = texelFetch(uAmbientOcclusion, ivec2(k % uListsWidth, k / uListsWidth), 0);
-      float occlusion =
-          mix(mix(corners.x, corners.y, local.x), mix(corners.w, corners.z, local.x), local.y);
-      outColor = vec4(shade(texel.rgb, occlusion, leafNormal(int(entry.w + 0.5), roll, fromFront)),
-                      1.0);
-#else
-      outColor = vec4(texel.rgb, 1.0);  // unlit: albedo (lit-only work is compiled out)
+    int r = vRecordBase + int(texelFetch(uLists, ivec2(k % kListsWidth, k / kListsWidth), 0).r);
+    Record record = fetchRecord(r);
+    // Solve centre + s·a + t·b = plane + (height + s·axisU.z + t·axisV.z)·slope for (s, t).
+    vec2 a = record.axisU.xy - record.axisU.z * slope;
+    vec2 c = record.axisV.xy - record.axisV.z * slope;
+    float det = a.x * c.y - a.y * c.x;
+    if (abs(det) < 1e-12) continue;  // the ray runs along the leaf
+    mat2 inverse = mat2(c.y, -a.y, -c.x, a.x) / det;
+    vec2 st = inverse * (plane - record.center + record.height * slope);
+    if (any(greaterThan(abs(st), vec2(1.0)))) continue;
+    vec3 leafNormal = cross(record.axisU, record.axisV);  // the front, as the reference winds it
+    bool front = dot(leafNormal, viewer) > 0.0;
+    vec2 uv = st * 0.5 + 0.5;
+    vec4 texel = textureGrad(uLeaves, vec3(uv, 2.0 * record.image + (front ? 0.0 : 1.0)),
+                             0.5 * (inverse * planeDx), 0.5 * (inverse * planeDy));
+    if (texel.a < 0.5) continue;
+#if PARALLAX
+    float z = record.height + st.x * record.axisU.z + st.y * record.axisV.z;
+    vec4 clip = uViewProjection *
+                vec4(vWorldPosition + vScale * z * (n + slope.x * t + slope.y * b), 1.0);
+    gl_FragDepth = clip.z / clip.w * 0.5 + 0.5;
 #endif
-      return;
-    }
+#ifdef CANOPY_LIT
+    vec4 corners = texelFetch(uAmbientOcclusion, ivec2(r % kRecordsPerRow, r / kRecordsPerRow), 0);
+    float occlusion = mix(mix(corners.x, corners.y, uv.x), mix(corners.w, corners.z, uv.x), uv.y);
+    vec3 world = leafNormal.x * t + leafNormal.y * b + leafNormal.z * n;
+    outColor = vec4(shade(texel.rgb, occlusion, normalize(front ? world : -world)), 1.0);
+#else
+    outColor = vec4(texel.rgb, 1.0);  // unlit: albedo (lit-only work is compiled out)
+#endif
+    return;
   }
   if (budget < listLength) {
-    vec4 texel = texture(uLowRes, vLowResUv);
+    vec4 texel = texture(uLowRes, vec3(vLowResUv, fromFront ? 0.0 : 1.0));
     if (texel.a >= 0.5) {
+#if PARALLAX
+      gl_FragDepth = gl_FragCoord.z;
+#endif
 #ifdef CANOPY_LIT
       float occlusion = uHasLowResOcclusion != 0 ? texture(uLowResOcclusion, vLowResUv).r : 1.0;
-      outColor =
-          vec4(shade(texel.rgb, occlusion, normalize(gl_FrontFacing ? vNormal : -vNormal)), 1.0);
+      outColor = vec4(shade(texel.rgb, occlusion, fromFront ? n : -n), 1.0);
 #else
       outColor = vec4(texel.rgb, 1.0);
 #endif

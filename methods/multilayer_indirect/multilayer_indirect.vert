@@ -7,6 +7,7 @@ layout(location = 4) in mat4 inModel;        // per instance, locations 4..7
 layout(location = 8) in ivec4 inHash;        // first cell in the hash atlas (xy), cells (zw)
 layout(location = 9) in vec2 inHalfExtents;  // of the billboard rectangle
 layout(location = 10) in vec3 inTangent;     // the billboard's first axis
+layout(location = 11) in int inRecordBase;   // the billboard's first leaf record
 
 uniform mat4 uViewProjection;
 
@@ -17,14 +18,18 @@ out vec2 vLowResUv;
 flat out ivec4 vHash;
 flat out vec2 vHalfExtents;
 flat out vec3 vTangent;
+flat out int vRecordBase;
+flat out float vScale;  // the instance's scale: billboard units to world units
 
 void main() {
   vNormal = mat3(inModel) * inNormal;
+  vScale = length(vNormal);
   vUv = inUv;
   vLowResUv = inLowResUv;
   vHash = inHash;
   vHalfExtents = inHalfExtents;
   vTangent = mat3(inModel) * inTangent;
+  vRecordBase = inRecordBase;
   vec4 world = inModel * vec4(inPosition, 1.0);
   vWorldPosition = world.xyz;
   gl_Position = uViewProjection * world;

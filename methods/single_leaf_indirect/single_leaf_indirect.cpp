@@ -1,5 +1,9 @@
 #include "methods/single_leaf_indirect/single_leaf_indirect.h"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
 #include "common/config.h"
 #include "methods/common/cloud_levels.h"
 #include "methods/common/cloud_params.h"
@@ -7,6 +11,7 @@
 #include "methods/common/leaf_orientations.h"
 #include "methods/common/lod_instances.h"
 #include "methods/common/mesh.h"
+#include "methods/common/mipmaps.h"
 #include "methods/single_leaf_indirect/single_leaf_grid.h"
 
 namespace canopy {
@@ -26,7 +31,8 @@ struct SingleLeafParams {
   void visit(Visitor& v) {
     cloud.visit(v);
     v("cell_size", cellSize, 0.05f, 100.0f,
-      "grid cell side in mean leaf lengths (the grid resolution; the memory knob)");
+      "grid cell side in mean leaf lengths (the grid resolution; the memory knob); leaves keep "
+      "their own size");
     v("max_cells", maxCells, 1, 4096, "cap on cells per billboard side");
     bins.visit(v);
     v("leaf_image_size", leafImageSize, 4, 512, "texels per side of each oriented leaf image");
@@ -45,12 +51,17 @@ struct Vertex {
 struct AssetFields {
   glm::ivec2 indexSize{0};  // the cell index atlas
   size_t leafImages = 0;
+  int radius = 0;
   template <class V>
   void visit(V& v) {
     v("index_size", indexSize);
     v("leaf_images", leafImages);
+    v("search_radius", radius);
   }
 };
+
+constexpr int kScaleSteps = 32;  // a leaf's size in cells, in 1/32 steps up to 255/32
+constexpr int kMaxRadius = 3;    // larger leaves are clipped to 7×7 cells
 
 class SingleLeafIndirect final : public Method {
  public:
@@ -62,9 +73,9 @@ class SingleLeafIndirect final : public Method {
     mLevels = {};
     mLevels.treeBounds = tree.bounds;
     mWood.bake(tree, mParams.wood.levels());
-    if (orientedImageCount(tree.leafTextures.size(), mParams.bins) >= 65535) {
+    if (orientedImageCount(tree.leafTextures.size(), mParams.bins) >= 4095) {
       throwInputError(
-          "single_leaf_indirect: rotations × tilts × 2 × leaf textures must stay below 65535");
+          "single_leaf_indirect: rotations × tilts × 2 × leaf textures must stay below 4095");
     }
     const auto clouds = buildBillboardCloudFamily(tree, mParams.cloud.clustering,
                                                   mParams.cloud.divisors(), ctx.seed);
@@ -89,23 +100,35 @@ class SingleLeafIndirect final : public Method {
           mParams.cellSize, layout.width, layout.height);
     }
     mIndexSize = {layout.width, layout.height};
-    mIndex.assign(size_t(layout.width) * layout.height, 0);
-    size_t filled = 0, leavesKept = 0;
+    mIndex.assign(size_t(layout.width) * layout.height, 0u);
+    size_t filled = 0, represented = 0;
+    float largest = 0.0f;
     for (size_t i = 0; i < grids.size(); ++i) {
       const SingleLeafGrid& grid = grids[i];
+      float low = std::numeric_limits<float>::max(), high = std::numeric_limits<float>::lowest();
+      for (size_t cell = 0; cell < grid.leaf.size(); ++cell) {
+        if (grid.leaf[cell] < 0) continue;
+        low = std::min(low, grid.height[cell]);
+        high = std::max(high, grid.height[cell]);
+      }
       for (int y = 0; y < grid.cells.y; ++y) {
         for (int x = 0; x < grid.cells.x; ++x) {
           const size_t cell = size_t(y) * grid.cells.x + x;
           if (grid.leaf[cell] < 0) continue;
+          const auto scale = static_cast<uint32_t>(
+              std::clamp(std::lround(grid.scale[cell] * float(kScaleSteps)), 1L, 255L));
+          const auto depth = static_cast<uint32_t>(
+              std::lround((grid.height[cell] - low) / std::max(high - low, 1e-12f) * 4095.0f));
           mIndex[size_t(layout.origins[i].y + y) * layout.width + layout.origins[i].x + x] =
-              static_cast<uint16_t>(grid.image[cell] + 1);
+              (grid.image[cell] + 1) | scale << 12 | depth << 20;
+          largest = std::max(largest, float(scale) / float(kScaleSteps));
           ++filled;
         }
       }
-      if (i < clouds[0].billboards.size()) {
-        for (int32_t leaf : grid.leaf) leavesKept += leaf >= 0;
-      }
+      if (i < clouds[0].billboards.size()) represented += grid.leavesPlaced;
     }
+    // A leaf of s cell lengths centred on its cell reaches (s − 1) / 2 cells beyond it.
+    mRadius = std::clamp(static_cast<int>(std::ceil((largest - 1.0f) * 0.5f)), 0, kMaxRadius);
     mVertices.clear();
     mIndices.clear();
     static constexpr int kU[4] = {0, 1, 1, 0}, kV[4] = {0, 0, 1, 1};
@@ -122,8 +145,8 @@ class SingleLeafIndirect final : public Method {
     mLeafImages = buildOrientedLeafImages(tree, sampler, mParams.bins, mParams.leafImageSize);
     mReport = {{"clouds", describeClouds(clouds)}, {"index_atlas", {layout.width, layout.height}},
                {"filled_cells", filled},           {"leaf_images", mLeafImages.size()},
-               {"cell_length", cellLength},        {"leaves_shown_finest_level", leavesKept},
-               {"leaves", tree.leaves.size()}};
+               {"cell_length", cellLength},        {"leaves_represented", represented},
+               {"leaves", tree.leaves.size()},     {"search_radius", mRadius}};
   }
 
   void upload(gl::Device& device) override {
@@ -151,11 +174,11 @@ class SingleLeafIndirect final : public Method {
     g.BindVertexArray(0);
     g.BindBuffer(GL_ARRAY_BUFFER, 0);
     mIndexTexture =
-        device.createTexture({GL_TEXTURE_2D, mIndexSize.x, mIndexSize.y, 1, GL_R16UI, false,
+        device.createTexture({GL_TEXTURE_2D, mIndexSize.x, mIndexSize.y, 1, GL_R32UI, false,
                               MemoryCategory::kTexture, "single-leaf index atlas"});
-    device.uploadTexture(mIndexTexture, GL_RED_INTEGER, GL_UNSIGNED_SHORT, mIndex.data());
+    device.uploadTexture(mIndexTexture, GL_RED_INTEGER, GL_UNSIGNED_INT, mIndex.data());
     gl::setTextureSampling(mIndexTexture, false, false);
-    mLeavesTexture = uploadLeafImageArray(device, mLeafImages, "oriented leaf images");
+    mLeavesTexture = uploadAlphaTestedArray(device, mLeafImages, true, "oriented leaf images");
     mProgram = device.createProgram(
         {gl::embeddedShader("methods/single_leaf_indirect/single_leaf_indirect.vert"),
          gl::embeddedShader("methods/single_leaf_indirect/single_leaf_indirect.frag")});
@@ -171,6 +194,8 @@ class SingleLeafIndirect final : public Method {
     setFrameUniforms(mProgram, frame);
     mProgram.set("uCells", 0);
     mProgram.set("uLeaves", 1);
+    mProgram.set("uRadius", mRadius);
+    mProgram.set("uImagesPerSide", mParams.bins.tilts * mParams.bins.rotations);
     g.ActiveTexture(GL_TEXTURE0);
     g.BindTexture(GL_TEXTURE_2D, mIndexTexture.id());
     g.ActiveTexture(GL_TEXTURE1);
@@ -192,7 +217,7 @@ class SingleLeafIndirect final : public Method {
   void save(AssetFolder& asset) const override {
     asset.describe("single_leaf_indirect", effectiveParams(), mReport);
     mLevels.save(asset);
-    asset.writeFields(AssetFields{mIndexSize, mLeafImages.size()});
+    asset.writeFields(AssetFields{mIndexSize, mLeafImages.size(), mRadius});
     asset.writeBlob("vertices.bin", mVertices);
     asset.writeBlob("indices.bin", mIndices);
     asset.writeBlob("cell_index.bin", mIndex);
@@ -209,13 +234,16 @@ class SingleLeafIndirect final : public Method {
     mIndexSize = fields.indexSize;
     mVertices = asset.readBlobAs<Vertex>("vertices.bin");
     mIndices = asset.readBlobAs<uint32_t>("indices.bin");
-    mIndex = asset.readBlobAs<uint16_t>("cell_index.bin");
+    mIndex = asset.readBlobAs<uint32_t>("cell_index.bin");
+    mRadius = fields.radius;
+    if (mRadius < 0 || mRadius > kMaxRadius)
+      throwInputError("{}: search radius {} outside [0, {}]", folder, mRadius, kMaxRadius);
     mLeafImages = asset.readImages("leaf_image_{}.png", fields.leafImages);
     if (mIndex.size() != size_t(mIndexSize.x) * mIndexSize.y)
       throwInputError("{}: cell index size mismatch", folder);
-    for (uint16_t reference : mIndex) {
-      if (reference > mLeafImages.size())
-        throwInputError("{}: cell names leaf image {} of {}", folder, reference,
+    for (uint32_t word : mIndex) {
+      if ((word & 4095u) > mLeafImages.size())
+        throwInputError("{}: cell names leaf image {} of {}", folder, word & 4095u,
                         mLeafImages.size());
     }
     validateIndices(mIndices, mVertices.size(), asset.folder().string());
@@ -231,7 +259,9 @@ class SingleLeafIndirect final : public Method {
   std::vector<Vertex> mVertices;
   std::vector<uint32_t> mIndices;
   glm::ivec2 mIndexSize{1, 1};
-  std::vector<uint16_t> mIndex;
+  // Per cell: 0 empty, else (image + 1) | scale · kScaleSteps << 12 | depth rank << 20.
+  std::vector<uint32_t> mIndex;
+  int mRadius = 0;  // neighbouring cells a fragment looks at
   std::vector<ImageRgba8> mLeafImages;
   gl::Buffer mVbo, mIbo;
   gl::VertexArray mVao;

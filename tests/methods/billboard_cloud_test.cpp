@@ -10,6 +10,7 @@
 #include "bench/harness.h"
 #include "common/error.h"
 #include "common/metrics.h"
+#include "common/random.h"
 #include "methods/common/mipmaps.h"
 #include "methods/method.h"
 #include "test_support.h"
@@ -126,28 +127,61 @@ TEST(MinimumAreaRectangle, FindsTheRotatedRectangle) {
               1e-4f);
 }
 
-TEST(CoveragePreservingMips, KeepTheAlphaTestedFractionAtEveryLevel) {
-  // Sparse single-texel "leaves": box filtering alone would drop alpha under 0.5 everywhere.
+TEST(CoveragePreservingMips, KeepTheCoveredAreaAfterFilteringAtEveryLevel) {
+  // Small round "leaves" (alpha = the covered share of each texel, as the captures write it):
+  // box filtering alone lets their averaged alpha fall under 0.5, and counting passing texels
+  // ignores what bilinear filtering cuts off between them.
   ImageRgba8 image(64, 64);
+  Random random(5, 1);
+  std::vector<glm::vec3> discs;  // centre x, y and radius, in texels
+  for (int i = 0; i < 40; ++i)
+    discs.emplace_back(random.uniform() * 64, random.uniform() * 64,
+                       1.0f + 2.0f * random.uniform());
+  double covered = 0.0;
   for (int y = 0; y < 64; ++y) {
     for (int x = 0; x < 64; ++x) {
-      uint8_t* p = image.at(x, y);
-      p[1] = 200;
-      p[3] = ((x * 7 + y * 13) % 5 == 0) ? 255 : 0;
+      int inside = 0;
+      for (int s = 0; s < 64; ++s) {
+        const glm::vec2 p(x + (s % 8 + 0.5f) / 8, y + (s / 8 + 0.5f) / 8);
+        for (const glm::vec3& d : discs) {
+          if (glm::length(p - glm::vec2(d)) < d.z) {
+            ++inside;
+            break;
+          }
+        }
+      }
+      uint8_t* texel = image.at(x, y);
+      texel[1] = 200;
+      texel[3] = static_cast<uint8_t>(std::lround(255.0 * inside / 64.0));
+      covered += texel[3] / 255.0;
     }
   }
-  const auto levels = buildCoveragePreservingMips(image);
-  ASSERT_EQ(levels.size(), 7u);
-  const auto fraction = [](const ImageRgba8& level) {
-    int passing = 0;
-    for (size_t i = 3; i < level.pixels.size(); i += 4) passing += level.pixels[i] >= 128;
-    return double(passing) / double(level.width * level.height);
-  };
-  const double base = fraction(levels[0]);
-  for (size_t l = 1; l + 2 < levels.size(); ++l)
-    EXPECT_NEAR(fraction(levels[l]), base, 0.08) << "level " << l;
-  // Colour stays the covered texels' colour (alpha-weighted), not darkened by empty texels.
-  EXPECT_NEAR(levels[2].at(3, 3)[1], 200, 2);
+  covered /= 64.0 * 64.0;
+  // Plain box filtering to 8×8 (level 3), for comparison.
+  ImageRgba8 box(8, 8);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) {
+      int sum = 0;
+      for (int k = 0; k < 64; ++k) sum += image.at(x * 8 + k % 8, y * 8 + k / 8)[3];
+      box.at(x, y)[3] = static_cast<uint8_t>(sum / 64);
+    }
+  for (const Compression compression : {Compression::kNone, Compression::kDxt1}) {
+    const bool binary = compression == Compression::kDxt1;
+    const auto levels = buildCoveragePreservingMips(image, compression);
+    ASSERT_EQ(levels.size(), 7u);
+    EXPECT_GT(std::abs(alphaTestedArea(box, binary) - covered), 0.05) << "box filtering loses it";
+    for (size_t l = 0; l <= 3; ++l)
+      EXPECT_NEAR(alphaTestedArea(levels[l], binary), covered, 0.03) << "level " << l;
+    // Colour stays the covered texels' colour (alpha-weighted), not darkened by empty texels.
+    for (size_t l = 1; l <= 3; ++l) {
+      const ImageRgba8& level = levels[l];
+      for (size_t i = 0; i < level.pixels.size(); i += 4) {
+        if (level.pixels[i + 3] > 0) {
+          EXPECT_NEAR(level.pixels[i + 1], 200, 2);
+        }
+      }
+    }
+  }
 }
 
 // A billboard seen along its normal shows what the polygonal leaves of its cluster show.

@@ -7,6 +7,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "bench/harness.h"
 #include "common/error.h"
 #include "methods/common/leaf_orientations.h"
 #include "methods/method.h"
@@ -15,45 +16,74 @@
 namespace canopy {
 namespace {
 
-TEST(SingleLeafGrid, EachCellHoldsAtMostTheFrontmostLeafCentredInIt) {
+TEST(SingleLeafGrid, EveryLeafHasACellOfItsOwnNearItsCentre) {
   const Tree tree = test::smallTree(1500, 9);
   ClusteringParams params;
   params.clusters = 40;
   const BillboardCloud cloud = buildBillboardCloud(tree, params, 2);
   const OrientationBins bins;
   const float cellLength = meanLeafLength(tree);
-  const auto grids = buildSingleLeafGrids(tree, cloud, cellLength, bins, 1024);
-  ASSERT_EQ(grids.size(), cloud.billboards.size());
-  size_t shown = 0;
-  for (size_t b = 0; b < grids.size(); ++b) {
-    const Billboard& billboard = cloud.billboards[b];
-    const SingleLeafGrid& grid = grids[b];
-    ASSERT_EQ(grid.leaf.size(), size_t(grid.cells.x) * grid.cells.y);
-    // Expected winner per cell, computed independently: the front-most centre in the cell.
-    std::vector<float> front(grid.leaf.size(), std::numeric_limits<float>::lowest());
-    std::vector<int32_t> expected(grid.leaf.size(), -1);
-    for (uint32_t index : billboard.leaves) {
-      const glm::vec2 p = billboard.toPlane(tree.leaves[index].center);
+  for (const float cells : {1.0f, 3.0f}) {  // a coarse grid makes leaves crowd: cells halve
+    const auto grids = buildSingleLeafGrids(tree, cloud, cells * cellLength, bins, 1024);
+    ASSERT_EQ(grids.size(), cloud.billboards.size());
+    size_t placed = 0, halved = 0;
+    for (size_t b = 0; b < grids.size(); ++b) {
+      const Billboard& billboard = cloud.billboards[b];
+      const SingleLeafGrid& grid = grids[b];
+      ASSERT_EQ(grid.leaf.size(), size_t(grid.cells.x) * grid.cells.y);
+      halved += grid.cellLength < 0.75f * cells * cellLength;
+      std::vector<int> seen(tree.leaves.size(), 0);
       const glm::vec2 cellSize = 2.0f * billboard.halfExtents / glm::vec2(grid.cells);
-      const int cx = std::clamp(int(std::floor((p.x + billboard.halfExtents.x) / cellSize.x)), 0,
-                                grid.cells.x - 1);
-      const int cy = std::clamp(int(std::floor((p.y + billboard.halfExtents.y) / cellSize.y)), 0,
-                                grid.cells.y - 1);
-      const size_t cell = size_t(cy) * grid.cells.x + cx;
-      const float height = glm::dot(tree.leaves[index].center - billboard.center, billboard.normal);
-      if (height > front[cell]) front[cell] = height, expected[cell] = int32_t(index);
+      for (size_t cell = 0; cell < grid.leaf.size(); ++cell) {
+        if (grid.leaf[cell] < 0) continue;
+        const Leaf& leaf = tree.leaves[size_t(grid.leaf[cell])];
+        ++seen[size_t(grid.leaf[cell])];
+        ++placed;
+        // Independently: the cell that holds the leaf's projected centre, and the distance.
+        const glm::vec2 p = (billboard.toPlane(leaf.center) + billboard.halfExtents) / cellSize;
+        const glm::ivec2 home =
+            glm::clamp(glm::ivec2(glm::floor(p)), glm::ivec2(0), grid.cells - 1);
+        const glm::ivec2 at(int(cell % grid.cells.x), int(cell / grid.cells.x));
+        EXPECT_LE(std::max(std::abs(at.x - home.x), std::abs(at.y - home.y)), kSearchRadius);
+        EXPECT_EQ(grid.image[cell], orientedImageIndex(leaf, billboard, bins));
+        // The image keeps the leaf's own size whatever the cell size.
+        EXPECT_NEAR(grid.scale[cell] * grid.cellLength,
+                    2.0f * std::max(leaf.halfExtents.x, leaf.halfExtents.y), 1e-5f);
+      }
+      for (uint32_t index : billboard.leaves) EXPECT_EQ(seen[index], 1) << "leaf " << index;
+      EXPECT_EQ(grid.leavesPlaced, billboard.leaves.size());
     }
-    EXPECT_EQ(grid.leaf, expected) << "billboard " << b;
-    for (size_t cell = 0; cell < grid.leaf.size(); ++cell) {
-      if (grid.leaf[cell] < 0) continue;
-      ++shown;
-      EXPECT_EQ(grid.image[cell],
-                orientedImageIndex(tree.leaves[grid.leaf[cell]], billboard, bins));
+    EXPECT_EQ(placed, tree.leaves.size()) << "every leaf is shown";
+    if (cells == 3.0f) {
+      EXPECT_GT(halved, 0u) << "crowded billboards halve their cells";
     }
   }
-  // One leaf per cell drops the leaves that share a cell: fewer shown than the tree has.
-  EXPECT_LT(shown, tree.leaves.size());
-  EXPECT_GT(shown, tree.leaves.size() / 4);
+}
+
+TEST(SingleLeafIndirect, ShowsEveryLeafAndKeepsLeafSizeWhateverTheCellSize) {
+  // Bake report and image: the same tree at two cell sizes covers about as much of the frame
+  // (leaves keep their size), and every leaf is represented.
+  const Tree tree = test::smallTree(800, 4);
+  auto context = test::makeTestContext();
+  gl::Ledger ledger;
+  gl::Device device(ledger);
+  RenderSettings settings;
+  settings.width = settings.height = 128;
+  Harness harness(device, settings);
+  const Camera camera = orbitCamera(tree.bounds, {2.0f, 20.0f, 40.0f}, 40.0f);
+  std::vector<long> covered;
+  for (const double cellSize : {0.5, 2.0}) {
+    auto method = test::bakeAndUpload(device, tree, "single_leaf_indirect",
+                                      {{"cell_size", cellSize}, {"lod", false}, {"wood", false}},
+                                      Shading::kUnlit, "cells " + std::to_string(cellSize));
+    EXPECT_EQ(method->bakeReport().at("leaves_represented").get<size_t>(), tree.leaves.size());
+    const ImageRgba8 image = harness.render(*method, camera);
+    long count = 0;
+    for (size_t i = 3; i < image.pixels.size(); i += 4) count += image.pixels[i] >= 128;
+    covered.push_back(count);
+  }
+  ASSERT_GT(covered[0], 500);
+  EXPECT_NEAR(double(covered[1]) / double(covered[0]), 1.0, 0.25);
 }
 
 TEST(LeafOrientations, IndexEncodesRotationTiltAndSide) {
