@@ -8,6 +8,7 @@ paper_figures/<name>/:
   psnr_vs_fragments.png PSNR against fragment-shader invocations per pixel of the views
   speedup_vs_flip.png   forest speedup against the FLIP of the forest frames
   memory_vs_psnr.png    GPU memory vs PSNR with the Pareto front (less memory, more PSNR)
+  memory_curves.png     methods swept over their memory knob: close-up PSNR and FLIP vs memory
   bake_time.png         bake time per method variant
   comparison_grid.png   rows: views; columns: reference then each variant, each image above its
                         per-pixel error heat map (with a scale bar)       [needs images/]
@@ -138,6 +139,57 @@ def plot_memory_vs_psnr(rows, trees, path):
         axis.set_title(tree)
         axis.grid(True, which="both", alpha=0.3)
     save_figure(fig, path)
+
+
+def method_of(row):
+    """The method a variant runs, with its non-memory parameters: variants that differ only in the
+    method's memory knob draw one curve."""
+    label = row["variant"]
+    match = re.search(r"\[(.*)\]$", label)
+    if not match:
+        return label
+    kept = [p for p in match.group(1).split(",") if p.split("=")[0] not in MEMORY_KNOBS]
+    return row["method"] + (f"[{','.join(kept)}]" if kept else "")
+
+
+# Each method's memory knob (canopy-bench --list-methods; the budget search turns the same ones).
+MEMORY_KNOBS = {"density", "hash_resolution", "cell_size", "texture_size", "texels", "atlas_size"}
+
+
+def plot_memory_curves(rows, trees, path):
+    """The multi-layer paper's Fig. 13 as measured curves: for every method swept over its memory
+    knob, PSNR and FLIP of the close-up ring (the orbit views when the run has none) against GPU
+    memory. False when no method has two memory points."""
+    curves = {}
+    for row in rows:
+        memory = number(row.get("memory_total_mb"))
+        psnr = number(row.get("psnr_closeup")) or number(row.get("psnr"))
+        flip = number(row.get("flip_closeup")) or number(row.get("flip"))
+        if memory is None or psnr is None or psnr >= 99.9:
+            continue
+        curves.setdefault((row["tree"], method_of(row)), []).append((memory, psnr, flip))
+    curves = {k: sorted(v) for k, v in curves.items() if len(v) >= 2}
+    if not curves:
+        return False
+    closeup = any(number(r.get("psnr_closeup")) is not None for r in rows)
+    fig, axes = plt.subplots(2, len(trees), figsize=(5.2 * len(trees), 6.4), squeeze=False)
+    for column, tree in enumerate(trees):
+        for (curve_tree, method), points in curves.items():
+            if curve_tree != tree:
+                continue
+            xs = [p[0] for p in points]
+            axes[0][column].plot(xs, [p[1] for p in points], "o-", label=method)
+            axes[1][column].plot(xs, [p[2] for p in points], "s--", label=method)
+        for row_index, ylabel in enumerate(["PSNR (dB)", "LDR-FLIP (lower is better)"]):
+            axis = axes[row_index][column]
+            axis.set_xscale("log")
+            axis.set_xlabel("GPU memory (MB, ledger)")
+            axis.set_ylabel(("close-up " if closeup else "") + ylabel)
+            axis.grid(True, which="both", alpha=0.3)
+            axis.set_title(tree, fontsize=9)
+            axis.legend(fontsize=6)
+    save_figure(fig, path)
+    return True
 
 
 def plot_bake_time(rows, path):
@@ -469,6 +521,10 @@ def make_figures(run_dir: Path, out_root: Path):
                 "is the Pareto front (no other variant has less memory and more PSNR).")
     plot_bake_time(rows, out / "bake_time.png")
     made.append("- `bake_time.png`: bake time per tree and variant (log scale).")
+    if plot_memory_curves(rows, trees, out / "memory_curves.png"):
+        made.append("- `memory_curves.png`: each method swept over its memory knob, PSNR (top) and FLIP "
+                    "(bottom) of the close-up ring (the orbit views without one) against GPU memory: the "
+                    "multi-layer paper's Fig. 13 as measured curves.")
     variants = [v for v in dict.fromkeys(r["variant"] for r in rows) if v != "polygonal"]
     for tree in trees:
         if index.tree_name(tree) is None:

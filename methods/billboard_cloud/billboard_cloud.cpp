@@ -22,7 +22,7 @@ namespace {
 // docs/METHODS.md show.
 struct BillboardCloudParams {
   CloudParams cloud;
-  float density = 32.0f;
+  float density = 16.0f;
   int supersample = 4;
   int maxBillboardTexels = 1024;
   bool mipmaps = true;
@@ -60,8 +60,8 @@ class BillboardCloudMethod final : public Method {
     mLevels = {};
     mLevels.treeBounds = tree.bounds;
     mWood.bake(tree, mParams.wood.levels());
-    const std::vector<BillboardCloud> clouds = buildBillboardCloudFamily(
-        tree, mParams.cloud.clustering, mParams.cloud.divisors(), ctx.seed);
+    const std::vector<BillboardCloud> clouds =
+        buildBillboardCloudFamily(tree, mParams.cloud.levels(), ctx.seed);
     mReport = {{"clouds", describeClouds(clouds)}};
     // Texture size of every billboard at the requested density.
     std::vector<const Billboard*> billboards;
@@ -137,6 +137,7 @@ class BillboardCloudMethod final : public Method {
     setFrameUniforms(mProgram, frame);
     mProgram.set("uAtlas", 0);
     mProgram.set("uBackLayer", float(mAtlas.size() - 1));
+    mProgram.set("uBinaryAlpha", mParams.compression == "dxt1" ? 1 : 0);
     // The lit variant declares the occlusion sampler too: a unit of its own (a 2D and an array
     // sampler on one unit is an invalid draw), unused as uHasOcclusion is 0.
     mProgram.set("uOcclusion", 1);

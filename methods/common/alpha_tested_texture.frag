@@ -8,6 +8,10 @@ in vec2 vUv;
 
 uniform sampler2DArray uAtlas;  // sRGB, so samples are linear
 uniform float uBackLayer;
+// 1 when the atlas is BC1: its transparent texels decode as black, which filtering blends into
+// the edges of what passes the test; dividing by the filtered alpha gives back the covered
+// texels' own colour (exact for BC1's 0-or-1 alpha).
+uniform int uBinaryAlpha;
 uniform sampler2D uOcclusion;  // ambient occlusion over the same atlas (R), when uHasOcclusion
 uniform int uHasOcclusion;
 #include "methods/common/lighting.glsl"
@@ -17,7 +21,7 @@ out vec4 outColor;
 void main() {
   vec4 texel = texture(uAtlas, vec3(vUv, gl_FrontFacing ? 0.0 : uBackLayer));
   if (texel.a < 0.5) discard;
-  vec3 color = texel.rgb;
+  vec3 color = uBinaryAlpha != 0 ? texel.rgb / texel.a : texel.rgb;
   if (uLit != 0) {
     vec3 normal = normalize(gl_FrontFacing ? vNormal : -vNormal);
 #ifdef CANOPY_LIT

@@ -348,6 +348,18 @@ BillboardCloud buildBillboardCloud(const Tree& tree, const ClusteringParams& par
   tbb::parallel_for(size_t(0), pieces.size(), [&](size_t b) {
     cloud.billboards[b] = makeBillboard(tree, planes[pieces[b].first], *pieces[b].second);
   });
+  // The pieces of one cluster keep its whole rectangle's longer side (their grids' scale).
+  std::vector<float> clusterLength(k, 0.0f);
+  tbb::parallel_for(0, k, [&](int c) {
+    const Billboard whole =
+        groups[c].size() == 1 ? Billboard{} : makeBillboard(tree, planes[c], members[c]);
+    clusterLength[c] = 2.0f * std::max(whole.halfExtents.x, whole.halfExtents.y);
+  });
+  for (size_t b = 0; b < pieces.size(); ++b) {
+    Billboard& billboard = cloud.billboards[b];
+    const float own = 2.0f * std::max(billboard.halfExtents.x, billboard.halfExtents.y);
+    billboard.clusterLength = std::max(own, clusterLength[pieces[b].first]);
+  }
   double distanceSum = 0.0, alignmentSum = 0.0;
   for (const Billboard& billboard : cloud.billboards) {
     distanceSum += double(billboard.meanPlaneDistance) * 4.0 * double(billboard.leaves.size());
@@ -364,15 +376,14 @@ BillboardCloud buildBillboardCloud(const Tree& tree, const ClusteringParams& par
 }
 
 std::vector<BillboardCloud> buildBillboardCloudFamily(const Tree& tree,
-                                                      const ClusteringParams& params,
-                                                      const std::vector<int>& divisors,
+                                                      const std::vector<ClusteringParams>& levels,
                                                       uint64_t seed) {
   std::vector<BillboardCloud> family;
-  for (int divisor : divisors) {
-    ClusteringParams level = params;
-    level.clusters = std::max(1, static_cast<int>(std::lround(double(params.clusters) / divisor)));
-    family.push_back(buildBillboardCloud(tree, level, seed + static_cast<uint64_t>(divisor)));
-  }
+  // Each cloud's own seed: as when the family was named by the divisors 1, 3, 10.
+  static constexpr uint64_t kSeedOffsets[] = {1, 3, 10};
+  for (size_t level = 0; level < levels.size(); ++level)
+    family.push_back(buildBillboardCloud(tree, levels[level],
+                                         seed + (level < 3 ? kSeedOffsets[level] : level * 10)));
   return family;
 }
 

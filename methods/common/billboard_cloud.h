@@ -16,14 +16,14 @@ namespace canopy {
 // + orientationWeight · L² · (1 − (n·n_leaf)²)                  orientation
 // + compactnessWeight · L² · |c_leaf − centroid|² / r²           locality, r = R_tree / K^(1/3)
 struct ClusteringParams {
-  int clusters = 200;              // K, billboards of the finest cloud
-  float orientationWeight = 1.0f;  // weight of the leaf-orientation term
-  float compactnessWeight = 1.0f;  // weight of the locality term
-  int iterations = 20;             // assignment/refit rounds at most (stops when stable)
+  int clusters = 260;               // K, clusters (planes) of the finest cloud
+  float orientationWeight = 0.25f;  // weight of the leaf-orientation term
+  float compactnessWeight = 0.0f;   // weight of the locality term
+  int iterations = 20;              // assignment/refit rounds at most (stops when stable)
   // A cluster's leaves that lie apart on its plane (gap above this many mean leaf lengths) get
   // billboards of their own, so a plane across the crown is no crown-sized, mostly empty quad;
   // 0 keeps one billboard per cluster.
-  float splitGap = 0.0f;
+  float splitGap = 2.0f;
 };
 
 // One billboard: a planar rectangle and the leaves it stands for.
@@ -38,6 +38,10 @@ struct Billboard {
   float maxPlaneDistance = 0;
   float projectedLeafArea = 0;  // Σ leaf area · |n·n_leaf|
   float alignmentSum = 0;       // Σ |n·n_leaf| over the leaves
+  // The longer side of its cluster's whole rectangle (its own where the cluster did not split):
+  // grids over billboards take their cell size from it, so a split cluster's pieces keep the
+  // resolution the whole would have had.
+  float clusterLength = 0;
 
   glm::vec3 corner(int i) const;  // CCW seen from +normal: (−,−) (+,−) (+,+) (−,+)
   glm::vec2 toPlane(const glm::vec3& p) const;  // coordinates along axisU, axisV from center
@@ -63,11 +67,10 @@ struct BillboardCloud {
 // thread count. Throws InputError naming "clusters" when K <= 0 or K > leaves.
 BillboardCloud buildBillboardCloud(const Tree& tree, const ClusteringParams& params, uint64_t seed);
 
-// The coarse-to-fine family for geometric level of detail: clouds of K / divisor billboards for
-// each divisor (e.g. {1, 3, 10}), at least one billboard each.
+// The coarse-to-fine family for geometric level of detail: one cloud per entry of `levels`
+// (finest first), each clustered with its own parameters.
 std::vector<BillboardCloud> buildBillboardCloudFamily(const Tree& tree,
-                                                      const ClusteringParams& params,
-                                                      const std::vector<int>& divisors,
+                                                      const std::vector<ClusteringParams>& levels,
                                                       uint64_t seed);
 
 // The minimum-area rectangle enclosing 2D points (rotating calipers on the convex hull):

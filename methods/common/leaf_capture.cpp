@@ -158,16 +158,32 @@ ImageRgba8 captureLeavesOrthographic(const Tree& tree, const LeafImageSampler& s
 }
 
 AtlasLayout packAtlas(const std::vector<glm::ivec2>& sizes, int padding, int alignment) {
-  const auto align = [&](int v) { return (v + alignment - 1) / alignment * alignment; };
+  // A rectangle's slot is aligned to the largest power of two up to `alignment` that its longer
+  // side reaches, its padding at most half that: beyond those mip levels the whole rectangle is
+  // under one texel, i.e. under a pixel on screen. Small rectangles (the split clouds' hundreds
+  // of tiny billboards) then cost little more than their texels.
+  const auto slotOf = [&](const glm::ivec2& size) {
+    int align = 1;
+    while (align * 2 <= alignment && align * 2 <= std::max(size.x, size.y)) align *= 2;
+    const int pad = std::min(padding, std::max(1, align / 2));
+    const auto up = [&](int v) { return (v + align - 1) / align * align; };
+    struct Slot {
+      glm::ivec2 size;
+      int padding, align;
+    };
+    return Slot{glm::ivec2(up(size.x + 2 * pad), up(size.y + 2 * pad)), pad, align};
+  };
   std::vector<size_t> order(sizes.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(),
-                   [&](size_t a, size_t b) { return sizes[a].y > sizes[b].y; });
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return slotOf(sizes[a]).size.y > slotOf(sizes[b]).size.y;
+  });
   double area = 0.0;
   int widest = 1;
   for (const glm::ivec2& s : sizes) {
-    area += double(align(s.x + 2 * padding)) * align(s.y + 2 * padding);
-    widest = std::max(widest, align(s.x + 2 * padding));
+    const glm::ivec2 slot = slotOf(s).size;
+    area += double(slot.x) * slot.y;
+    widest = std::max(widest, slot.x);
   }
   AtlasLayout layout;
   layout.width = 1;
@@ -175,15 +191,17 @@ AtlasLayout packAtlas(const std::vector<glm::ivec2>& sizes, int padding, int ali
   layout.origins.resize(sizes.size());
   int x = 0, y = 0, shelfHeight = 0;
   for (size_t i : order) {
-    const int slotW = align(sizes[i].x + 2 * padding), slotH = align(sizes[i].y + 2 * padding);
-    if (x + slotW > layout.width) {
+    const auto [slot, pad, align] = slotOf(sizes[i]);
+    x = (x + align - 1) / align * align;
+    if (x + slot.x > layout.width) {
       x = 0;
-      y += shelfHeight;
+      // Shelves start at multiples of the largest alignment, so every slot's y is aligned too.
+      y = (y + shelfHeight + alignment - 1) / alignment * alignment;
       shelfHeight = 0;
     }
-    layout.origins[i] = {x + padding, y + padding};
-    x += slotW;
-    shelfHeight = std::max(shelfHeight, slotH);
+    layout.origins[i] = {x + pad, y + pad};
+    x += slot.x;
+    shelfHeight = std::max(shelfHeight, slot.y);
   }
   layout.height = std::max(alignment, y + shelfHeight);
   return layout;

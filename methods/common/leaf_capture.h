@@ -48,7 +48,9 @@ ImageRgba8 captureLeavesOrthographic(const Tree& tree, const LeafImageSampler& s
 
 // Positions of rectangles in an atlas: shelves sorted by height, each rectangle inside a slot
 // with `padding` texels on every side, slots aligned to `alignment` texels (so the first
-// log2(alignment) mip levels of different rectangles never share a texel).
+// log2(alignment) mip levels of different rectangles never share a texel); a rectangle smaller
+// than that gets the alignment (and at most half of it as padding) of its longer side, as past
+// those levels it is under a texel.
 struct AtlasLayout {
   int width = 0;
   int height = 0;

@@ -57,7 +57,7 @@ struct LayeredBillboard {
 };
 
 struct LayeringParams {
-  int hashResolution = 32;  // cells along the (grown) rectangle's longer side
+  int hashResolution = 32;  // cells along the longer side of the billboard's cluster
   int maxLayers = 64;       // longest list kept (front-most fragments first)
   // Parallax: rays up to this in-plane slope (tan of the angle from the normal) find every leaf
   // they cross; the rectangle and the cells grow by each leaf's corner heights times it.

@@ -25,15 +25,15 @@ namespace {
 // docs/METHODS.md show.
 struct MultilayerParams {
   CloudParams cloud;
-  int hashResolution = 32;
+  int hashResolution = 16;
   int maxLayers = 64;
   int leafImageSize = 64;
   float lodFactor = 1.0f;
   int lowResTexelsPerCell = 1;
   bool ambientOcclusion = true;
   int aoRays = 32;
-  std::string compression = "none";
-  std::string listsPrecision = "float16";
+  std::string compression = "dxt5";
+  std::string listsPrecision = "8bit";
   bool parallax = false;
   float parallaxMaxAngle = 70.0f;
   WoodParams wood;
@@ -42,7 +42,7 @@ struct MultilayerParams {
   void visit(Visitor& v) {
     cloud.visit(v);
     v("hash_resolution", hashResolution, 1, 1024,
-      "hash cells along each billboard's longer side (the memory knob)");
+      "hash cells along the longer side of each billboard's cluster (the memory knob)");
     v("max_layers", maxLayers, 1, 255, "longest list kept per cell (front-most first)");
     v("leaf_image_size", leafImageSize, 4, 512,
       "texels per side of each leaf image (front and back per leaf texture)");
@@ -120,8 +120,7 @@ class MultilayerIndirect final : public Method {
     mLevels = {};
     mLevels.treeBounds = tree.bounds;
     mWood.bake(tree, mParams.wood.levels());
-    const auto clouds = buildBillboardCloudFamily(tree, mParams.cloud.clustering,
-                                                  mParams.cloud.divisors(), ctx.seed);
+    const auto clouds = buildBillboardCloudFamily(tree, mParams.cloud.levels(), ctx.seed);
     std::vector<const Billboard*> billboards;
     for (const BillboardCloud& cloud : clouds) {
       mLevels.addLevel(billboards.size(), cloud.billboards.size());
@@ -276,6 +275,7 @@ class MultilayerIndirect final : public Method {
       if (far) {
         program.set("uAtlas", 0);
         program.set("uBackLayer", 1.0f);
+        program.set("uBinaryAlpha", mParams.compression == "dxt1" ? 1 : 0);
         program.set("uOcclusion", 1);
         program.set("uHasOcclusion", mLowResOcclusionTexture.id() ? 1 : 0);
         g.ActiveTexture(GL_TEXTURE1);
@@ -505,6 +505,7 @@ class MultilayerIndirect final : public Method {
     program.set("uLowResOcclusion", 6);
     program.set("uHasLowResOcclusion", mLowResOcclusionTexture.id() ? 1 : 0);
     program.set("uLodFactor", mParams.lodFactor);
+    program.set("uBinaryAlpha", mParams.compression == "dxt1" ? 1 : 0);
     program.set("uAxisScale", mLists.axisScale);
     program.set("uHeightScale", mLists.heightScale);
     program.set("uMaxSlope", std::tan(mParams.parallaxMaxAngle * kPi / 180.0f));

@@ -31,6 +31,7 @@ uniform mat4 uViewProjection;
 uniform float uAxisScale;    // 8-bit records: range of the frame components
 uniform float uHeightScale;  // 8-bit records: range of the heights
 uniform float uMaxSlope;     // parallax: steeper rays are bent to this in-plane slope
+uniform int uBinaryAlpha;    // BC1 images: divide the filtered colour by the filtered alpha
 #include "methods/common/lighting.glsl"
 #ifndef CANOPY_LIT
 in vec3 vWorldPosition;  // lighting.glsl declares it for lit frames
@@ -124,6 +125,7 @@ void main() {
     vec4 texel = textureGrad(uLeaves, vec3(uv, 2.0 * record.image + (front ? 0.0 : 1.0)),
                              0.5 * (inverse * planeDx), 0.5 * (inverse * planeDy));
     if (texel.a < 0.5) continue;
+    if (uBinaryAlpha != 0) texel.rgb /= texel.a;  // BC1's transparent texels are black
 #if PARALLAX
     float z = record.height + st.x * record.axisU.z + st.y * record.axisV.z;
     vec4 clip = uViewProjection *
@@ -143,6 +145,7 @@ void main() {
   if (budget < listLength) {
     vec4 texel = texture(uLowRes, vec3(vLowResUv, fromFront ? 0.0 : 1.0));
     if (texel.a >= 0.5) {
+      if (uBinaryAlpha != 0) texel.rgb /= texel.a;
 #if PARALLAX
       gl_FragDepth = gl_FragCoord.z;
 #endif

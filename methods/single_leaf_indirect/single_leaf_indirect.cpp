@@ -77,8 +77,7 @@ class SingleLeafIndirect final : public Method {
       throwInputError(
           "single_leaf_indirect: rotations × tilts × 2 × leaf textures must stay below 4095");
     }
-    const auto clouds = buildBillboardCloudFamily(tree, mParams.cloud.clustering,
-                                                  mParams.cloud.divisors(), ctx.seed);
+    const auto clouds = buildBillboardCloudFamily(tree, mParams.cloud.levels(), ctx.seed);
     const float cellLength = mParams.cellSize * meanLeafLength(tree);
     std::vector<SingleLeafGrid> grids;
     std::vector<const Billboard*> billboards;

@@ -38,12 +38,57 @@ BillboardCloud* Clustering::cloud = nullptr;
 
 TEST_F(Clustering, EveryLeafIsInExactlyOneBillboard) {
   std::vector<int> seen(tree->leaves.size(), 0);
-  ASSERT_EQ(cloud->billboards.size(), 60u);
+  ASSERT_GE(cloud->billboards.size(), 60u);  // 60 planes, some cut into pieces
   for (const Billboard& billboard : cloud->billboards) {
     EXPECT_FALSE(billboard.leaves.empty());
     for (uint32_t leaf : billboard.leaves) ++seen[leaf];
   }
   for (size_t i = 0; i < seen.size(); ++i) ASSERT_EQ(seen[i], 1) << "leaf " << i;
+}
+
+TEST_F(Clustering, SplitPiecesOfAPlaneLieMoreThanTheGapApartAndNoSplitKeepsKBillboards) {
+  ClusteringParams params;
+  params.clusters = 60;
+  params.splitGap = 0.0f;
+  EXPECT_EQ(buildBillboardCloud(*tree, params, 4).billboards.size(), 60u);
+  // Independently: the pieces of one plane (same normal and offset) have projected leaf boxes
+  // that, grown by half the gap each, do not overlap.
+  const float gap = ClusteringParams{}.splitGap * cloud->meanLeafLength;
+  size_t planesSplit = 0;
+  for (size_t a = 0; a < cloud->billboards.size(); ++a) {
+    for (size_t b = a + 1; b < cloud->billboards.size(); ++b) {
+      const Billboard &p = cloud->billboards[a], &q = cloud->billboards[b];
+      if (p.normal != q.normal ||
+          std::abs(glm::dot(p.center - q.center, p.normal)) > 1e-4f * tree->boundingSphereRadius())
+        continue;
+      ++planesSplit;
+      // The split measures boxes along the plane axes the clustering picks for a normal.
+      const glm::vec3 helper =
+          std::abs(p.normal.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+      const glm::vec3 e1 = glm::normalize(glm::cross(helper, p.normal));
+      const glm::vec3 e2 = glm::cross(p.normal, e1);
+      const auto project = [&](const glm::vec3& x) {
+        return glm::vec2(glm::dot(x, e1), glm::dot(x, e2));
+      };
+      // Boxes may overlap through a chain of leaves' boxes only if the pieces were one group;
+      // pieces of one plane are different groups, so no single pair of leaf boxes overlaps.
+      for (uint32_t i : p.leaves) {
+        for (uint32_t j : q.leaves) {
+          glm::vec2 iLo(1e9f), iHi(-1e9f), jLo(1e9f), jHi(-1e9f);
+          for (int c = 0; c < 4; ++c) {
+            const glm::vec2 u = project(tree->leaves[i].corner(c));
+            const glm::vec2 v = project(tree->leaves[j].corner(c));
+            iLo = glm::min(iLo, u), iHi = glm::max(iHi, u), jLo = glm::min(jLo, v),
+            jHi = glm::max(jHi, v);
+          }
+          const bool overlap = iLo.x - gap < jHi.x && jLo.x - gap < iHi.x && iLo.y - gap < jHi.y &&
+                               jLo.y - gap < iHi.y;
+          EXPECT_FALSE(overlap) << "leaves " << i << " and " << j;
+        }
+      }
+    }
+  }
+  EXPECT_GT(planesSplit, 0u) << "the default gap splits some planes of this tree";
 }
 
 TEST_F(Clustering, LeafVerticesAreWithinTheReportedPlaneDistance) {
