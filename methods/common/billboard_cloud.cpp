@@ -348,18 +348,6 @@ BillboardCloud buildBillboardCloud(const Tree& tree, const ClusteringParams& par
   tbb::parallel_for(size_t(0), pieces.size(), [&](size_t b) {
     cloud.billboards[b] = makeBillboard(tree, planes[pieces[b].first], *pieces[b].second);
   });
-  // The pieces of one cluster keep its whole rectangle's longer side (their grids' scale).
-  std::vector<float> clusterLength(k, 0.0f);
-  tbb::parallel_for(0, k, [&](int c) {
-    const Billboard whole =
-        groups[c].size() == 1 ? Billboard{} : makeBillboard(tree, planes[c], members[c]);
-    clusterLength[c] = 2.0f * std::max(whole.halfExtents.x, whole.halfExtents.y);
-  });
-  for (size_t b = 0; b < pieces.size(); ++b) {
-    Billboard& billboard = cloud.billboards[b];
-    const float own = 2.0f * std::max(billboard.halfExtents.x, billboard.halfExtents.y);
-    billboard.clusterLength = std::max(own, clusterLength[pieces[b].first]);
-  }
   double distanceSum = 0.0, alignmentSum = 0.0;
   for (const Billboard& billboard : cloud.billboards) {
     distanceSum += double(billboard.meanPlaneDistance) * 4.0 * double(billboard.leaves.size());

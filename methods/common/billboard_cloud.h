@@ -38,10 +38,6 @@ struct Billboard {
   float maxPlaneDistance = 0;
   float projectedLeafArea = 0;  // Σ leaf area · |n·n_leaf|
   float alignmentSum = 0;       // Σ |n·n_leaf| over the leaves
-  // The longer side of its cluster's whole rectangle (its own where the cluster did not split):
-  // grids over billboards take their cell size from it, so a split cluster's pieces keep the
-  // resolution the whole would have had.
-  float clusterLength = 0;
 
   glm::vec3 corner(int i) const;  // CCW seen from +normal: (−,−) (+,−) (+,+) (−,+)
   glm::vec2 toPlane(const glm::vec3& p) const;  // coordinates along axisU, axisV from center

@@ -81,6 +81,29 @@ void writeCoverageTexel(uint8_t* out, const glm::vec3& linearSum, int covered, i
   out[3] = static_cast<uint8_t>(std::lround(255.0f * float(covered) / float(samples)));
 }
 
+ImageRgba8 renderCoverageImage(int size, int supersample,
+                               const std::function<glm::vec4(glm::vec2 unit)>& sample) {
+  ImageRgba8 image(size, size);
+  for (int y = 0; y < size; ++y) {
+    for (int x = 0; x < size; ++x) {
+      glm::vec3 sum(0.0f);
+      int covered = 0;
+      for (int sy = 0; sy < supersample; ++sy) {
+        for (int sx = 0; sx < supersample; ++sx) {
+          const glm::vec4 texel = sample(glm::vec2((x + (sx + 0.5f) / supersample) / size,
+                                                   (y + (sy + 0.5f) / supersample) / size));
+          if (texel.a < 0.5f) continue;
+          sum += glm::vec3(texel);
+          ++covered;
+        }
+      }
+      writeCoverageTexel(image.at(x, y), sum, covered, supersample * supersample);
+    }
+  }
+  dilateTransparentColors(image, 4);
+  return image;
+}
+
 ImageRgba8 captureLeavesOrthographic(const Tree& tree, const LeafImageSampler& sampler,
                                      const std::vector<uint32_t>& leaves,
                                      const Billboard& billboard, int width, int height,

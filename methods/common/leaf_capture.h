@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include <glm/vec2.hpp>
@@ -34,6 +35,13 @@ class LeafImageSampler {
 // linear colour: RGB the sRGB-encoded mean (left as is when nothing is covered), alpha the
 // coverage.
 void writeCoverageTexel(uint8_t* out, const glm::vec3& linearSum, int covered, int samples);
+
+// A size × size image of a leaf: `sample(unit)` gives the leaf's texel seen at a point of the
+// unit square (alpha < 0.5: not covered), taken supersample² times a texel. Colour: the linear
+// mean of the covered samples; alpha: their share; transparent texels get their covered
+// neighbours' colour (4 texels), so filtering does not pull in black.
+ImageRgba8 renderCoverageImage(int size, int supersample,
+                               const std::function<glm::vec4(glm::vec2 unit)>& sample);
 
 // What an orthographic camera on the +normal side of `billboard` (the −normal side when
 // `fromBack`) sees of `leaves` (and only them), over the billboard rectangle, at width × height

@@ -44,27 +44,10 @@ LeafImages buildLeafImages(const Tree& tree, const LeafImageSampler& sampler, in
     const glm::vec2 span = glm::abs(leaf.uvMax - leaf.uvMin);
     const float footprint =
         std::max(texSize.x * span.x, texSize.y * span.y) / float(size * kSupersample);
-    ImageRgba8 image(size, size);
-    for (int y = 0; y < size; ++y) {
-      for (int x = 0; x < size; ++x) {
-        glm::vec3 sum(0.0f);
-        int covered = 0;
-        for (int sy = 0; sy < kSupersample; ++sy) {
-          for (int sx = 0; sx < kSupersample; ++sx) {
-            const glm::vec2 unit((x + (sx + 0.5f) / kSupersample) / size,
-                                 (y + (sy + 0.5f) / kSupersample) / size);
-            const glm::vec4 texel = sampler.sample(
-                leaf.texture, back, leaf.uvMin + unit * (leaf.uvMax - leaf.uvMin), footprint);
-            if (texel.a < 0.5f) continue;
-            sum += glm::vec3(texel);
-            ++covered;
-          }
-        }
-        writeCoverageTexel(image.at(x, y), sum, covered, kSupersample * kSupersample);
-      }
-    }
-    dilateTransparentColors(image, 4);
-    out.layers[layer] = std::move(image);
+    out.layers[layer] = renderCoverageImage(size, kSupersample, [&](glm::vec2 unit) {
+      return sampler.sample(leaf.texture, back, leaf.uvMin + unit * (leaf.uvMax - leaf.uvMin),
+                            footprint);
+    });
   });
   return out;
 }

@@ -61,29 +61,15 @@ std::vector<ImageRgba8> buildOrientedLeafImages(const Tree& tree, const LeafImag
     const glm::ivec2 texSize = sampler.size(texture);
     const float footprint =
         float(std::max(texSize.x, texSize.y)) / float(size * kSupersample) / std::max(width, 0.1f);
-    for (int y = 0; y < size; ++y) {
-      for (int x = 0; x < size; ++x) {
-        glm::vec3 sum(0.0f);
-        int covered = 0;
-        for (int sy = 0; sy < kSupersample; ++sy) {
-          for (int sx = 0; sx < kSupersample; ++sx) {
-            const glm::vec2 q((x + (sx + 0.5f) / kSupersample) / size - 0.5f,
-                              (y + (sy + 0.5f) / kSupersample) / size - 0.5f);
-            const float b = glm::dot(q, along) / halfAlong;              // leaf v' in [−1, 1]
-            const float a = glm::dot(q, across) / (halfAcross * width);  // leaf u' in [−1, 1]
-            if (std::abs(a) > 1.0f || std::abs(b) > 1.0f) continue;
-            const glm::vec2 uv =
-                leaf->uvMin + (glm::vec2(a, b) + 1.0f) * 0.5f * (leaf->uvMax - leaf->uvMin);
-            const glm::vec4 texel = sampler.sample(texture, back, uv, footprint);
-            if (texel.a < 0.5f) continue;
-            sum += glm::vec3(texel);
-            ++covered;
-          }
-        }
-        writeCoverageTexel(image.at(x, y), sum, covered, kSupersample * kSupersample);
-      }
-    }
-    dilateTransparentColors(image, 4);
+    image = renderCoverageImage(size, kSupersample, [&](glm::vec2 unit) {
+      const glm::vec2 q = unit - 0.5f;
+      const float b = glm::dot(q, along) / halfAlong;              // leaf v' in [−1, 1]
+      const float a = glm::dot(q, across) / (halfAcross * width);  // leaf u' in [−1, 1]
+      if (std::abs(a) > 1.0f || std::abs(b) > 1.0f) return glm::vec4(0.0f);
+      const glm::vec2 uv =
+          leaf->uvMin + (glm::vec2(a, b) + 1.0f) * 0.5f * (leaf->uvMax - leaf->uvMin);
+      return sampler.sample(texture, back, uv, footprint);
+    });
   });
   return images;
 }

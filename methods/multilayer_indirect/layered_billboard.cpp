@@ -78,11 +78,7 @@ LayeredBillboard buildLayeredBillboard(const Tree& tree, const Billboard& billbo
     highs.push_back(hi);
     layered.records.push_back(record);
   }
-  // Cells of the size the billboard's whole cluster would have (split pieces alike); parallax
-  // growth adds cells rather than coarsening them.
-  const float longer = std::max(billboard.clusterLength,
-                                2.0f * std::max(billboard.halfExtents.x, billboard.halfExtents.y));
-  const float target = longer / float(params.hashResolution);
+  const float target = params.cellSize;
   layered.cells = {
       std::max(1, static_cast<int>(std::lround(2.0f * layered.halfExtents.x / target))),
       std::max(1, static_cast<int>(std::lround(2.0f * layered.halfExtents.y / target)))};

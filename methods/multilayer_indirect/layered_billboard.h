@@ -57,8 +57,8 @@ struct LayeredBillboard {
 };
 
 struct LayeringParams {
-  int hashResolution = 32;  // cells along the longer side of the billboard's cluster
-  int maxLayers = 64;       // longest list kept (front-most fragments first)
+  float cellSize = 1.0f;  // side of a hash cell on the plane (world units)
+  int maxLayers = 64;     // longest list kept (front-most fragments first)
   // Parallax: rays up to this in-plane slope (tan of the angle from the normal) find every leaf
   // they cross; the rectangle and the cells grow by each leaf's corner heights times it.
   // 0: leaves are looked up along the normal only (the paper).

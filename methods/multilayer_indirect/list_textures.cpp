@@ -24,19 +24,32 @@ float fromUnitWord(uint16_t word) {
   return float(word) / 65535.0f * 2.0f - 1.0f;
 }
 
-size_t texelOf(size_t record, int texel) {
-  return (record / kRecordsPerRow) * (kRecordsPerRow * kRecordTexels) +
-         (record % kRecordsPerRow) * kRecordTexels + size_t(texel);
+template <typename T>
+T* texelOf(RecordPlane& plane, size_t record) {
+  return reinterpret_cast<T*>(plane.data.data() + record * size_t(plane.bytesPerTexel));
+}
+template <typename T>
+const T* texelOf(const RecordPlane& plane, size_t record) {
+  return reinterpret_cast<const T*>(plane.data.data() + record * size_t(plane.bytesPerTexel));
 }
 
 }  // namespace
 
-size_t ListTextures::bytes() const {
-  const size_t listsBytes = size_t(kListsWidth) * listsHeight * (wideLists ? 4 : 2);
-  const size_t recordTexels = size_t(kRecordsPerRow) * kRecordTexels * recordsHeight;
-  const size_t ambientTexels = size_t(kRecordsPerRow) * recordsHeight;
-  return hash.size() * 4 + listsBytes + recordTexels * (eightBit ? 4 : 8) +
-         ambientTexels * (eightBit ? 2 : 4);
+std::vector<RecordPlane> emptyRecordPlanes(bool eightBit, int rows) {
+  std::vector<RecordPlane> planes;
+  if (eightBit) {
+    planes = {{"records_a", GL_RGBA16UI, GL_RGBA_INTEGER, GL_UNSIGNED_SHORT, 8, {}},
+              {"records_b", GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, 4, {}},
+              {"ambient_4bit", GL_RGBA4, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4, 2, {}}};
+  } else {
+    planes = {{"records_a", GL_RGBA16F, GL_RGBA, GL_FLOAT, 16, {}},
+              {"records_b", GL_RGBA16F, GL_RGBA, GL_FLOAT, 16, {}},
+              {"records_c", GL_RG16F, GL_RG, GL_FLOAT, 8, {}},
+              {"ambient", GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, 4, {}}};
+  }
+  for (RecordPlane& plane : planes)
+    plane.data.assign(size_t(kRecordsPerRow) * rows * plane.bytesPerTexel, 0);
+  return planes;
 }
 
 ListTextures packListTextures(const std::vector<LayeredBillboard>& layered, size_t withLists,
@@ -76,15 +89,7 @@ ListTextures packListTextures(const std::vector<LayeredBillboard>& layered, size
   out.recordCount = records;
   out.recordsHeight =
       static_cast<int>(std::max<size_t>(1, (records + kRecordsPerRow - 1) / kRecordsPerRow));
-  const size_t recordTexels = size_t(kRecordsPerRow) * kRecordTexels * out.recordsHeight;
-  const size_t ambientTexels = size_t(kRecordsPerRow) * out.recordsHeight;
-  if (eightBit) {
-    out.recordsByte.assign(recordTexels * 4, 0);
-    out.ambient4.assign(ambientTexels, 0xffff);
-  } else {
-    out.recordsHalf.assign(recordTexels * 4, 0.0f);
-    out.ambient.assign(ambientTexels * 4, 255);
-  }
+  out.planes = emptyRecordPlanes(eightBit, out.recordsHeight);
   for (size_t i = 0; i < withLists; ++i) {
     const LayeredBillboard& l = layered[i];
     const auto base = static_cast<uint32_t>(out.lists.size());
@@ -105,38 +110,33 @@ ListTextures packListTextures(const std::vector<LayeredBillboard>& layered, size
     for (size_t k = 0; k < l.records.size(); ++k) {
       const LeafRecord& r = l.records[k];
       const size_t index = out.recordBase[i] + k;
-      float* half = eightBit ? nullptr : &out.recordsHalf[texelOf(index, 0) * 4];
-      if (half) {
-        const float texels[12] = {r.center.x, r.center.y, r.height,  float(r.image),
-                                  r.axisU.x,  r.axisU.y,  r.axisV.x, r.axisV.y,
-                                  r.axisU.z,  r.axisV.z,  0.0f,      0.0f};
-        std::copy(texels, texels + 12, half);
-        for (int c = 0; c < 4; ++c)
-          out.ambient[index * 4 + c] = static_cast<uint8_t>(std::lround(r.ambient[c] * 255.0f));
+      if (!eightBit) {
+        const float a[4] = {r.center.x, r.center.y, r.axisU.x, r.axisU.y};
+        const float b[4] = {r.axisV.x, r.axisV.y, r.height, float(r.image)};
+        const float c[2] = {r.axisU.z, r.axisV.z};
+        std::copy(a, a + 4, texelOf<float>(out.planes[0], index));
+        std::copy(b, b + 4, texelOf<float>(out.planes[1], index));
+        std::copy(c, c + 2, texelOf<float>(out.planes[2], index));
+        uint8_t* ambient = texelOf<uint8_t>(out.planes[3], index);
+        for (int corner = 0; corner < 4; ++corner)
+          ambient[corner] = static_cast<uint8_t>(std::lround(r.ambient[corner] * 255.0f));
         continue;
       }
-      uint8_t* bytes = &out.recordsByte[texelOf(index, 0) * 4];
-      const uint16_t cx = unitWord(r.center.x / l.halfExtents.x);
-      const uint16_t cy = unitWord(r.center.y / l.halfExtents.y);
       const float s = out.axisScale;
-      const uint8_t texels[12] = {uint8_t(cx >> 8),
-                                  uint8_t(cx & 255),
-                                  uint8_t(cy >> 8),
-                                  uint8_t(cy & 255),
-                                  signedByte(r.axisU.x / s),
-                                  signedByte(r.axisU.y / s),
-                                  signedByte(r.axisV.x / s),
-                                  signedByte(r.axisV.y / s),
-                                  signedByte(r.height / out.heightScale),
-                                  signedByte(r.axisU.z / s),
-                                  signedByte(r.axisV.z / s),
-                                  uint8_t(r.image)};
-      std::copy(texels, texels + 12, bytes);
+      const auto pair = [](uint8_t high, uint8_t low) { return uint16_t(high << 8 | low); };
+      const uint16_t a[4] = {unitWord(r.center.x / l.halfExtents.x),
+                             unitWord(r.center.y / l.halfExtents.y),
+                             pair(signedByte(r.axisU.x / s), signedByte(r.axisU.y / s)),
+                             pair(signedByte(r.axisV.x / s), signedByte(r.axisV.y / s))};
+      const uint8_t b[4] = {signedByte(r.height / out.heightScale), signedByte(r.axisU.z / s),
+                            signedByte(r.axisV.z / s), uint8_t(r.image)};
+      std::copy(a, a + 4, texelOf<uint16_t>(out.planes[0], index));
+      std::copy(b, b + 4, texelOf<uint8_t>(out.planes[1], index));
       uint16_t word = 0;
-      for (int c = 0; c < 4; ++c)
+      for (int corner = 0; corner < 4; ++corner)
         word = uint16_t(word << 4 |
-                        uint16_t(std::lround(std::clamp(r.ambient[c], 0.0f, 1.0f) * 15.0f)));
-      out.ambient4[index] = word;
+                        uint16_t(std::lround(std::clamp(r.ambient[corner], 0.0f, 1.0f) * 15.0f)));
+      *texelOf<uint16_t>(out.planes[2], index) = word;
     }
   }
   out.listEntries = out.lists.size();
@@ -149,23 +149,28 @@ ListTextures packListTextures(const std::vector<LayeredBillboard>& layered, size
 LeafRecord decodeRecord(const ListTextures& textures, size_t r, glm::vec2 halfExtents) {
   LeafRecord record;
   if (!textures.eightBit) {
-    const float* t = &textures.recordsHalf[texelOf(r, 0) * 4];
-    record.center = {t[0], t[1]};
-    record.height = t[2];
-    record.image = static_cast<uint32_t>(std::lround(t[3]));
-    record.axisU = {t[4], t[5], t[8]};
-    record.axisV = {t[6], t[7], t[9]};
+    const float* a = texelOf<float>(textures.planes[0], r);
+    const float* b = texelOf<float>(textures.planes[1], r);
+    const float* c = texelOf<float>(textures.planes[2], r);
+    record.center = {a[0], a[1]};
+    record.axisU = {a[2], a[3], c[0]};
+    record.axisV = {b[0], b[1], c[1]};
+    record.height = b[2];
+    record.image = static_cast<uint32_t>(std::lround(b[3]));
     return record;
   }
-  const uint8_t* t = &textures.recordsByte[texelOf(r, 0) * 4];
-  record.center = glm::vec2(fromUnitWord(uint16_t(t[0] << 8 | t[1])),
-                            fromUnitWord(uint16_t(t[2] << 8 | t[3]))) *
-                  halfExtents;
+  const uint16_t* a = texelOf<uint16_t>(textures.planes[0], r);
+  const uint8_t* b = texelOf<uint8_t>(textures.planes[1], r);
+  record.center = glm::vec2(fromUnitWord(a[0]), fromUnitWord(a[1])) * halfExtents;
   const float s = textures.axisScale;
-  record.axisU = glm::vec3(fromSignedByte(t[4]), fromSignedByte(t[5]), fromSignedByte(t[9])) * s;
-  record.axisV = glm::vec3(fromSignedByte(t[6]), fromSignedByte(t[7]), fromSignedByte(t[10])) * s;
-  record.height = fromSignedByte(t[8]) * textures.heightScale;
-  record.image = t[11];
+  record.axisU = glm::vec3(fromSignedByte(uint8_t(a[2] >> 8)), fromSignedByte(uint8_t(a[2])),
+                           fromSignedByte(b[1])) *
+                 s;
+  record.axisV = glm::vec3(fromSignedByte(uint8_t(a[3] >> 8)), fromSignedByte(uint8_t(a[3])),
+                           fromSignedByte(b[2])) *
+                 s;
+  record.height = fromSignedByte(b[0]) * textures.heightScale;
+  record.image = b[3];
   return record;
 }
 

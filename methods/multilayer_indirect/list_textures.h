@@ -1,30 +1,45 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <glm/vec2.hpp>
 
+#include "common/gl/api.h"
 #include "methods/multilayer_indirect/layered_billboard.h"
 
 namespace canopy {
 
 // How the multi-layer method's textures index each other; the shader reads the same constants.
-inline constexpr int kRecordsPerRow = 1024;  // records texture: 3 texels a record
-inline constexpr int kRecordTexels = 3;
-inline constexpr int kListsWidth = 4096;  // lists texture: one entry a texel
+inline constexpr int kRecordsPerRow = 1024;  // every record plane: one texel a record
+inline constexpr int kListsWidth = 4096;     // lists texture: one entry a texel
 inline constexpr uint32_t kMaxListStart = 1u << 24;
+
+// One texture of the leaf records, a texel per record, rows of kRecordsPerRow.
+struct RecordPlane {
+  const char* name;       // the asset blob ("records_a.bin") and ledger label stem
+  GLenum internalFormat;  // GPU storage
+  GLenum format, type;    // how `data` is laid out for upload
+  int bytesPerTexel;      // of `data`
+  std::vector<uint8_t> data;
+};
 
 // The Hash, Lists and records textures of a set of layered billboards, packed as §6 describes
 // (all Hash Textures in one atlas, all lists in one atlas), with the records the lists name kept
 // once per leaf and billboard: a list entry is the record's index relative to its billboard's
 // first record, so one leaf that overlaps eight cells is stored once, not eight times.
 //
-// A record is three texels. Float16 (RGBA16F): (centre.x, centre.y, height, image),
-// (axisU.x, axisU.y, axisV.x, axisV.y), (axisU.z, axisV.z, 0, 0). 8-bit (RGBA8): the centre as
-// two 16-bit fractions of the billboard's half extents (high and low bytes), the four in-plane
-// axis components as signed bytes of `axisScale`, then (height / heightScale, axisU.z, axisV.z
-// as signed bytes, image); a signed byte b stands for (b − 128) / 127.
+// A record is split over planes so that a list entry the fragment's point misses costs the list
+// fetch and one record fetch (8-bit) or two (float16): the first plane holds what locating the
+// point on the leaf needs.
+// - 8-bit: A (RGBA16UI) = centre as two 16-bit fractions of the billboard's half extents, then
+//   (axisU.x, axisU.y) and (axisV.x, axisV.y) as signed byte pairs of `axisScale`; B (RGBA8) =
+//   height / heightScale, axisU.z, axisV.z as signed bytes, and the image; AO (RGBA4).
+//   A signed byte b stands for (b − 128) / 127. 14 bytes a record.
+// - float16: A (RGBA16F) = centre, axisU.xy; B (RGBA16F) = axisV.xy, height, image;
+//   C (RG16F) = axisU.z, axisV.z; AO (RGBA8). 24 bytes a record.
+// The parallax shader needs every plane for each entry; the paper's, A (and B) until it hits.
 struct ListTextures {
   bool eightBit = false;
   glm::ivec2 hashSize{1, 1};
@@ -36,19 +51,16 @@ struct ListTextures {
   std::vector<uint32_t> lists;  // kListsWidth × listsHeight, uploaded as R16UI or R32UI
   size_t recordCount = 0;
   int recordsHeight = 1;
-  std::vector<float> recordsHalf;    // float16 mode: RGBA texels (uploaded into RGBA16F)
-  std::vector<uint8_t> recordsByte;  // 8-bit mode: RGBA8 texels
-  std::vector<uint8_t> ambient;      // float16 mode: RGBA8 per record, AO at the leaf corners
-  std::vector<uint16_t> ambient4;    // 8-bit mode: RGBA4 per record
-  float axisScale = 1.0f;            // 8-bit mode: the axes' component range
-  float heightScale = 1.0f;          // 8-bit mode: the heights' range
+  std::vector<RecordPlane> planes;  // the record planes above, ambient occlusion last
+  float axisScale = 1.0f;           // 8-bit mode: the axes' component range
+  float heightScale = 1.0f;         // 8-bit mode: the heights' range
   size_t listEntries = 0;
   size_t longestList = 0;
   size_t droppedEntries = 0;
-
-  // GPU bytes of what packs() fills, by texture (the ledger counts the same formats).
-  size_t bytes() const;
 };
+
+// The record planes of a mode, empty (`records` rows of kRecordsPerRow texels).
+std::vector<RecordPlane> emptyRecordPlanes(bool eightBit, int rows);
 
 // Packs the first `withLists` billboards' hash grids, lists and records; billboards after them
 // (the far cloud, which draws its low-resolution texture only) get none. InputError when the
@@ -56,7 +68,7 @@ struct ListTextures {
 ListTextures packListTextures(const std::vector<LayeredBillboard>& layered, size_t withLists,
                               bool eightBit, size_t images);
 
-// The record `r` as the shader decodes it from the packed texels (for checks and tests).
+// The record `r` as the shader decodes it from the planes (for checks and tests).
 LeafRecord decodeRecord(const ListTextures& textures, size_t r, glm::vec2 halfExtents);
 
 }  // namespace canopy

@@ -25,7 +25,7 @@ namespace {
 // docs/METHODS.md show.
 struct MultilayerParams {
   CloudParams cloud;
-  int hashResolution = 16;
+  int hashResolution = 64;
   int maxLayers = 64;
   int leafImageSize = 64;
   float lodFactor = 1.0f;
@@ -41,8 +41,9 @@ struct MultilayerParams {
   template <class Visitor>
   void visit(Visitor& v) {
     cloud.visit(v);
-    v("hash_resolution", hashResolution, 1, 1024,
-      "hash cells along the longer side of each billboard's cluster (the memory knob)");
+    v("hash_resolution", hashResolution, 1, 8192,
+      "hash cells along the tree's bounding-sphere diameter: every billboard's cells are squares "
+      "of that size (the memory knob)");
     v("max_layers", maxLayers, 1, 255, "longest list kept per cell (front-most first)");
     v("leaf_image_size", leafImageSize, 4, 512,
       "texels per side of each leaf image (front and back per leaf texture)");
@@ -67,16 +68,26 @@ struct MultilayerParams {
   }
 };
 
+// A billboard corner, 48 bytes (thousands of billboards: the bytes count against the paper's
+// memory). The corner's place on the billboard comes from gl_VertexID (four per billboard).
 struct Vertex {
   glm::vec3 position;
-  glm::vec3 normal;
+  uint32_t normal;     // 2_10_10_10 signed normalized
   glm::vec2 lowResUv;  // location 2: the far level's mesh.vert reads it as its uv
-  glm::vec2 uv;        // over the billboard
-  glm::ivec4 hash;     // first cell in the hash atlas, cells
+  int16_t hash[4];     // first cell in the hash atlas, cells
   glm::vec2 halfExtents;
-  glm::vec3 tangent;   // the billboard's axisU: with the normal, the frame records live in
+  uint32_t tangent;    // the billboard's axisU, 2_10_10_10: with the normal, the records' frame
   int32_t recordBase;  // the billboard's first record
 };
+
+uint32_t packSnorm10(const glm::vec3& v) {
+  uint32_t word = 0;
+  for (int c = 0; c < 3; ++c) {
+    const auto q = static_cast<int32_t>(std::lround(std::clamp(v[c], -1.0f, 1.0f) * 511.0f));
+    word |= (uint32_t(q) & 1023u) << (10 * c);
+  }
+  return word;
+}
 
 // The asset header's own part.
 struct AssetFields {
@@ -139,7 +150,7 @@ class MultilayerIndirect final : public Method {
     std::vector<LayeredBillboard> layered(billboards.size());
     tbb::parallel_for(size_t(0), billboards.size(), [&](size_t i) {
       LayeringParams layering;
-      layering.hashResolution = mParams.hashResolution;
+      layering.cellSize = 2.0f * tree.boundingSphereRadius() / float(mParams.hashResolution);
       layering.maxLayers = mParams.maxLayers;
       layering.maxSlope = mParams.parallax && i < withLists
                               ? std::tan(mParams.parallaxMaxAngle * kPi / 180.0f)
@@ -211,24 +222,14 @@ class MultilayerIndirect final : public Method {
       device.uploadTexture(mListsTexture, GL_RED_INTEGER, GL_UNSIGNED_SHORT, narrow.data());
       gl::api().PixelStorei(GL_UNPACK_ALIGNMENT, 4);
     }
-    const int recordTexels = kRecordsPerRow * kRecordTexels;
-    if (packed()) {
-      mRecordsTexture =
-          create(recordTexels, mLists.recordsHeight, GL_RGBA8, "leaf records (8-bit)");
-      device.uploadTexture(mRecordsTexture, GL_RGBA, GL_UNSIGNED_BYTE, mLists.recordsByte.data());
-      mAmbientTexture = create(kRecordsPerRow, mLists.recordsHeight, GL_RGBA4,
-                               "leaf corner ambient occlusion (4-bit)");
-      device.uploadTexture(mAmbientTexture, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4,
-                           mLists.ambient4.data());
-    } else {
-      mRecordsTexture = create(recordTexels, mLists.recordsHeight, GL_RGBA16F, "leaf records");
-      device.uploadTexture(mRecordsTexture, GL_RGBA, GL_FLOAT, mLists.recordsHalf.data());
-      mAmbientTexture =
-          create(kRecordsPerRow, mLists.recordsHeight, GL_RGBA8, "leaf corner ambient occlusion");
-      device.uploadTexture(mAmbientTexture, GL_RGBA, GL_UNSIGNED_BYTE, mLists.ambient.data());
+    mRecordTextures.clear();
+    for (const RecordPlane& plane : mLists.planes) {
+      gl::Texture& texture = mRecordTextures.emplace_back(
+          create(kRecordsPerRow, mLists.recordsHeight, plane.internalFormat, plane.name));
+      device.uploadTexture(texture, plane.format, plane.type, plane.data.data());
+      gl::setTextureSampling(texture, false, false);
     }
-    for (const gl::Texture* texture :
-         {&mHashTexture, &mListsTexture, &mRecordsTexture, &mAmbientTexture})
+    for (const gl::Texture* texture : {&mHashTexture, &mListsTexture})
       gl::setTextureSampling(*texture, false, false);
     const Compression compression = parseCompression(mParams.compression);
     mLeavesTexture = uploadAlphaTestedArray(device, mLeafLayers, true, "leaf images", compression);
@@ -313,13 +314,8 @@ class MultilayerIndirect final : public Method {
     } else {
       asset.writeBlob("lists.bin", std::vector<uint16_t>(mLists.lists.begin(), mLists.lists.end()));
     }
-    if (packed()) {
-      asset.writeBlob("records_8bit.bin", mLists.recordsByte);
-      asset.writeBlob("ambient_4bit.bin", mLists.ambient4);
-    } else {
-      asset.writeBlob("records.bin", mLists.recordsHalf);
-      asset.writeBlob("ambient.bin", mLists.ambient);
-    }
+    for (const RecordPlane& plane : mLists.planes)
+      asset.writeBlob(std::string(plane.name) + ".bin", plane.data);
     asset.writeBlob("vertices.bin", mVertices);
     asset.writeBlob("indices.bin", mIndices);
     asset.writeBlob("hash.bin", mLists.hash);
@@ -355,19 +351,12 @@ class MultilayerIndirect final : public Method {
       const auto narrow = asset.readBlobAs<uint16_t>("lists.bin");
       l.lists.assign(narrow.begin(), narrow.end());
     }
-    const size_t recordTexels =
-        size_t(kRecordsPerRow) * kRecordTexels * std::max(l.recordsHeight, 0);
-    const size_t ambientTexels = size_t(kRecordsPerRow) * std::max(l.recordsHeight, 0);
+    l.planes = emptyRecordPlanes(packed(), std::max(l.recordsHeight, 0));
     bool sizesMatch = true;
-    if (packed()) {
-      l.recordsByte = asset.readBlobAs<uint8_t>("records_8bit.bin");
-      l.ambient4 = asset.readBlobAs<uint16_t>("ambient_4bit.bin");
-      sizesMatch = l.recordsByte.size() == recordTexels * 4 && l.ambient4.size() == ambientTexels;
-    } else {
-      l.recordsHalf = asset.readBlobAs<float>("records.bin");
-      l.ambient = asset.readBlobAs<uint8_t>("ambient.bin");
-      sizesMatch =
-          l.recordsHalf.size() == recordTexels * 4 && l.ambient.size() == ambientTexels * 4;
+    for (RecordPlane& plane : l.planes) {
+      const size_t expected = plane.data.size();
+      plane.data = asset.readBlobAs<uint8_t>(std::string(plane.name) + ".bin");
+      sizesMatch = sizesMatch && plane.data.size() == expected;
     }
     mLeafLayers = asset.readImages("leaf_image_{}.png", fields.leafImages * 2);
     mLowRes = asset.readImages("lowres_{}.png", fields.lowResBack ? 2 : 1);
@@ -459,8 +448,17 @@ class MultilayerIndirect final : public Method {
       for (int c = 0; c < 4; ++c) {
         const glm::vec3 corner = b.center + b.axisU * ((2.0f * kU[c] - 1.0f) * half.x) +
                                  b.axisV * ((2.0f * kV[c] - 1.0f) * half.y);
-        mVertices.push_back({corner, b.normal, atlas.cornerUv(i, c), glm::vec2(kU[c], kV[c]),
-                             glm::ivec4(mLists.hashOrigins[i], layered[i].cells), half, b.axisU,
+        const glm::ivec4 hash(mLists.hashOrigins[i], layered[i].cells);
+        if (glm::any(glm::greaterThan(hash, glm::ivec4(32767))))
+          throwInputError(
+              "multilayer_indirect: the hash atlas outgrows 32767 cells; lower "
+              "'hash_resolution'");
+        mVertices.push_back({corner,
+                             packSnorm10(b.normal),
+                             atlas.cornerUv(i, c),
+                             {int16_t(hash.x), int16_t(hash.y), int16_t(hash.z), int16_t(hash.w)},
+                             half,
+                             packSnorm10(b.axisU),
                              static_cast<int32_t>(mLists.recordBase[i])});
       }
       for (uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) mIndices.push_back(base + k);
@@ -471,24 +469,24 @@ class MultilayerIndirect final : public Method {
     const gl::Api& g = gl::api();
     mVao = gl::createVertexArray();
     g.BindBuffer(GL_ARRAY_BUFFER, mVbo.id());
-    const auto attribute = [&](GLuint location, GLint components, size_t offset) {
+    const auto attribute = [&](GLuint location, GLint components, GLenum type, bool normalized,
+                               size_t offset) {
       g.EnableVertexAttribArray(location);
-      g.VertexAttribPointer(location, components, GL_FLOAT, GL_FALSE, sizeof(Vertex),
-                            reinterpret_cast<const void*>(offset));
+      g.VertexAttribPointer(location, components, type, normalized ? GL_TRUE : GL_FALSE,
+                            sizeof(Vertex), reinterpret_cast<const void*>(offset));
     };
-    const auto integer = [&](GLuint location, GLint components, size_t offset) {
+    const auto integer = [&](GLuint location, GLint components, GLenum type, size_t offset) {
       g.EnableVertexAttribArray(location);
-      g.VertexAttribIPointer(location, components, GL_INT, sizeof(Vertex),
+      g.VertexAttribIPointer(location, components, type, sizeof(Vertex),
                              reinterpret_cast<const void*>(offset));
     };
-    attribute(0, 3, offsetof(Vertex, position));
-    attribute(1, 3, offsetof(Vertex, normal));
-    attribute(2, 2, offsetof(Vertex, lowResUv));
-    attribute(3, 2, offsetof(Vertex, uv));
-    integer(8, 4, offsetof(Vertex, hash));
-    attribute(9, 2, offsetof(Vertex, halfExtents));
-    attribute(10, 3, offsetof(Vertex, tangent));
-    integer(11, 1, offsetof(Vertex, recordBase));
+    attribute(0, 3, GL_FLOAT, false, offsetof(Vertex, position));
+    attribute(1, 4, GL_INT_2_10_10_10_REV, true, offsetof(Vertex, normal));
+    attribute(2, 2, GL_FLOAT, false, offsetof(Vertex, lowResUv));
+    integer(8, 4, GL_SHORT, offsetof(Vertex, hash));
+    attribute(9, 2, GL_FLOAT, false, offsetof(Vertex, halfExtents));
+    attribute(10, 4, GL_INT_2_10_10_10_REV, true, offsetof(Vertex, tangent));
+    integer(11, 1, GL_INT, offsetof(Vertex, recordBase));
     g.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, mIbo.id());
     g.BindVertexArray(0);
     g.BindBuffer(GL_ARRAY_BUFFER, 0);
@@ -498,23 +496,28 @@ class MultilayerIndirect final : public Method {
     const gl::Api& g = gl::api();
     program.set("uHash", 0);
     program.set("uLists", 1);
-    program.set("uRecords", 2);
-    program.set("uLeaves", 3);
-    program.set("uLowRes", 4);
-    program.set("uAmbientOcclusion", 5);
-    program.set("uLowResOcclusion", 6);
+    program.set("uLeaves", 2);
+    program.set("uLowRes", 3);
+    program.set("uLowResOcclusion", 4);
     program.set("uHasLowResOcclusion", mLowResOcclusionTexture.id() ? 1 : 0);
     program.set("uLodFactor", mParams.lodFactor);
     program.set("uBinaryAlpha", mParams.compression == "dxt1" ? 1 : 0);
     program.set("uAxisScale", mLists.axisScale);
     program.set("uHeightScale", mLists.heightScale);
     program.set("uMaxSlope", std::tan(mParams.parallaxMaxAngle * kPi / 180.0f));
-    const std::pair<GLenum, GLuint> units[] = {
-        {GL_TEXTURE_2D, mHashTexture.id()},           {GL_TEXTURE_2D, mListsTexture.id()},
-        {GL_TEXTURE_2D, mRecordsTexture.id()},        {GL_TEXTURE_2D_ARRAY, mLeavesTexture.id()},
-        {GL_TEXTURE_2D_ARRAY, mLowResTexture.id()},   {GL_TEXTURE_2D, mAmbientTexture.id()},
-        {GL_TEXTURE_2D, mLowResOcclusionTexture.id()}};
-    for (GLenum unit = 0; unit < 7; ++unit) {
+    std::vector<std::pair<GLenum, GLuint>> units = {{GL_TEXTURE_2D, mHashTexture.id()},
+                                                    {GL_TEXTURE_2D, mListsTexture.id()},
+                                                    {GL_TEXTURE_2D_ARRAY, mLeavesTexture.id()},
+                                                    {GL_TEXTURE_2D_ARRAY, mLowResTexture.id()},
+                                                    {GL_TEXTURE_2D, mLowResOcclusionTexture.id()}};
+    // The record planes (list_textures.h), ambient occlusion last, from unit 5 on.
+    static constexpr const char* kPlaneUniforms[] = {"uRecordsA", "uRecordsB", "uRecordsC"};
+    for (size_t p = 0; p < mRecordTextures.size(); ++p) {
+      const bool last = p + 1 == mRecordTextures.size();
+      program.set(last ? "uAmbientOcclusion" : kPlaneUniforms[p], static_cast<int>(units.size()));
+      units.emplace_back(GL_TEXTURE_2D, mRecordTextures[p].id());
+    }
+    for (GLenum unit = 0; unit < units.size(); ++unit) {
       g.ActiveTexture(GL_TEXTURE0 + unit);
       g.BindTexture(units[unit].first, units[unit].second);
     }
@@ -532,8 +535,8 @@ class MultilayerIndirect final : public Method {
   std::string mFragmentText;            // the fragment shader with its variant's defines
   gl::Buffer mVbo, mIbo;
   gl::VertexArray mVao;
-  gl::Texture mHashTexture, mListsTexture, mRecordsTexture, mLeavesTexture, mLowResTexture,
-      mAmbientTexture, mLowResOcclusionTexture;
+  gl::Texture mHashTexture, mListsTexture, mLeavesTexture, mLowResTexture, mLowResOcclusionTexture;
+  std::vector<gl::Texture> mRecordTextures;  // one per record plane, ambient occlusion last
   gl::Program mProgram, mFarProgram;
   LodInstances mLod;
   WoodRenderer mWood;
@@ -545,7 +548,7 @@ void registerMultilayerIndirect(MethodRegistry& registry) {
   addMethod<MultilayerIndirect, MultilayerParams>(
       registry, "multilayer_indirect",
       "multi-layer indirect texturing (García et al. 2007): lists of leaf fragments per hash cell",
-      {.memoryKnob = MemoryKnob{"hash_resolution", 4, 256, true, true},
+      {.memoryKnob = MemoryKnob{"hash_resolution", 16, 1024, true, true},
        .cost = {.bakeSeconds = 1.2, .frameCost = 1.0}});
 }
 

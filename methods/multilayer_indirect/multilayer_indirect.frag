@@ -20,7 +20,14 @@ flat in float vScale;
 
 uniform usampler2D uHash;        // R32UI: (list start << 8) | list length, 0 when empty
 uniform usampler2D uLists;       // R16UI/R32UI: record index relative to the billboard's first
-uniform sampler2D uRecords;      // three texels a record (list_textures.h)
+#if RECORDS_8BIT
+uniform usampler2D uRecordsA;    // RGBA16UI: centre, axisU.xy, axisV.xy (list_textures.h)
+uniform sampler2D uRecordsB;     // RGBA8: height, axisU.z, axisV.z, image
+#else
+uniform sampler2D uRecordsA;     // RGBA16F: centre, axisU.xy
+uniform sampler2D uRecordsB;     // RGBA16F: axisV.xy, height, image
+uniform sampler2D uRecordsC;     // RG16F: axisU.z, axisV.z
+#endif
 uniform sampler2DArray uLeaves;  // leaf images, sRGB: image i front at 2i, back at 2i + 1
 uniform sampler2DArray uLowRes;  // the layered representation at low resolution: front, back
 uniform sampler2D uAmbientOcclusion;  // per record: ambient term at the leaf's four corners
@@ -44,37 +51,53 @@ out vec4 outColor;
 const int kRecordsPerRow = 1024;
 const int kListsWidth = 4096;
 
+// A leaf record (list_textures.h), fetched in two steps: what locating the fragment's point on
+// the leaf needs, then, for the entry it hits, the rest.
 struct Record {
   vec2 center;
-  float height;
   vec3 axisU;  // the leaf's axes times its half extents, in the billboard frame
   vec3 axisV;
+  float height;
   float image;
 };
 
-Record fetchRecord(int r) {
-  ivec2 at = ivec2(3 * (r % kRecordsPerRow), r / kRecordsPerRow);
-  vec4 t0 = texelFetch(uRecords, at, 0);
-  vec4 t1 = texelFetch(uRecords, at + ivec2(1, 0), 0);
-  vec4 t2 = texelFetch(uRecords, at + ivec2(2, 0), 0);
+float signedByte(float unit) { return (unit * 255.0 - 128.0) / 127.0; }
+
+// Centre and in-plane axes (and, for parallax, everything).
+Record fetchPlanar(ivec2 at) {
   Record record;
 #if RECORDS_8BIT
-  vec2 words = vec2(t0.x * 65280.0 + t0.y * 255.0, t0.z * 65280.0 + t0.w * 255.0);
-  record.center = (words / 65535.0 * 2.0 - 1.0) * vHalfExtents;
-  vec4 s1 = (t1 * 255.0 - 128.0) / 127.0;
-  vec3 s2 = (t2.xyz * 255.0 - 128.0) / 127.0;
-  record.axisU = vec3(s1.xy, s2.y) * uAxisScale;
-  record.axisV = vec3(s1.zw, s2.z) * uAxisScale;
-  record.height = s2.x * uHeightScale;
-  record.image = floor(t2.w * 255.0 + 0.5);
+  uvec4 a = texelFetch(uRecordsA, at, 0);
+  record.center = (vec2(a.xy) / 65535.0 * 2.0 - 1.0) * vHalfExtents;
+  record.axisU = vec3((vec2(a.z >> 8u, a.z & 255u) - 128.0) / 127.0 * uAxisScale, 0.0);
+  record.axisV = vec3((vec2(a.w >> 8u, a.w & 255u) - 128.0) / 127.0 * uAxisScale, 0.0);
+  record.height = 0.0;  // completeRecord fills these
+  record.image = 0.0;
 #else
-  record.center = t0.xy;
-  record.height = t0.z;
-  record.image = floor(t0.w + 0.5);
-  record.axisU = vec3(t1.xy, t2.x);
-  record.axisV = vec3(t1.zw, t2.y);
+  vec4 a = texelFetch(uRecordsA, at, 0);
+  vec4 b = texelFetch(uRecordsB, at, 0);
+  record.center = a.xy;
+  record.axisU = vec3(a.zw, 0.0);
+  record.axisV = vec3(b.xy, 0.0);
+  record.height = b.z;
+  record.image = floor(b.w + 0.5);
 #endif
   return record;
+}
+
+// The normal components of the axes, the height and the image.
+void completeRecord(ivec2 at, inout Record record) {
+#if RECORDS_8BIT
+  vec4 b = texelFetch(uRecordsB, at, 0);
+  record.height = signedByte(b.x) * uHeightScale;
+  record.axisU.z = signedByte(b.y) * uAxisScale;
+  record.axisV.z = signedByte(b.z) * uAxisScale;
+  record.image = floor(b.w * 255.0 + 0.5);
+#else
+  vec2 c = texelFetch(uRecordsC, at, 0).xy;
+  record.axisU.z = c.x;
+  record.axisV.z = c.y;
+#endif
 }
 
 vec3 shade(vec3 albedo, float occlusion, vec3 normal) { return albedo * lighting(normal, occlusion); }
@@ -110,7 +133,11 @@ void main() {
   for (int i = 0; i < budget; ++i) {
     int k = start + (fromFront ? i : listLength - 1 - i);
     int r = vRecordBase + int(texelFetch(uLists, ivec2(k % kListsWidth, k / kListsWidth), 0).r);
-    Record record = fetchRecord(r);
+    ivec2 at = ivec2(r % kRecordsPerRow, r / kRecordsPerRow);
+    Record record = fetchPlanar(at);
+#if PARALLAX
+    completeRecord(at, record);  // the ray's crossing depends on the heights
+#endif
     // Solve centre + s·a + t·b = plane + (height + s·axisU.z + t·axisV.z)·slope for (s, t).
     vec2 a = record.axisU.xy - record.axisU.z * slope;
     vec2 c = record.axisV.xy - record.axisV.z * slope;
@@ -119,6 +146,9 @@ void main() {
     mat2 inverse = mat2(c.y, -a.y, -c.x, a.x) / det;
     vec2 st = inverse * (plane - record.center + record.height * slope);
     if (any(greaterThan(abs(st), vec2(1.0)))) continue;
+#if !PARALLAX
+    completeRecord(at, record);
+#endif
     vec3 leafNormal = cross(record.axisU, record.axisV);  // the front, as the reference winds it
     bool front = dot(leafNormal, viewer) > 0.0;
     vec2 uv = st * 0.5 + 0.5;
@@ -133,7 +163,7 @@ void main() {
     gl_FragDepth = clip.z / clip.w * 0.5 + 0.5;
 #endif
 #ifdef CANOPY_LIT
-    vec4 corners = texelFetch(uAmbientOcclusion, ivec2(r % kRecordsPerRow, r / kRecordsPerRow), 0);
+    vec4 corners = texelFetch(uAmbientOcclusion, at, 0);
     float occlusion = mix(mix(corners.x, corners.y, uv.x), mix(corners.w, corners.z, uv.x), uv.y);
     vec3 world = leafNormal.x * t + leafNormal.y * b + leafNormal.z * n;
     outColor = vec4(shade(texel.rgb, occlusion, normalize(front ? world : -world)), 1.0);

@@ -1,8 +1,7 @@
 #version 430 core
 layout(location = 0) in vec3 inPosition;
-layout(location = 1) in vec3 inNormal;
+layout(location = 1) in vec3 inNormal;    // unit, or nearly (10-bit components)
 layout(location = 2) in vec2 inLowResUv;     // in the low-resolution atlas
-layout(location = 3) in vec2 inUv;           // over the billboard, [0, 1]²
 layout(location = 4) in mat4 inModel;        // per instance, locations 4..7
 layout(location = 8) in ivec4 inHash;        // first cell in the hash atlas (xy), cells (zw)
 layout(location = 9) in vec2 inHalfExtents;  // of the billboard rectangle
@@ -22,9 +21,11 @@ flat out int vRecordBase;
 flat out float vScale;  // the instance's scale: billboard units to world units
 
 void main() {
-  vNormal = mat3(inModel) * inNormal;
+  vNormal = mat3(inModel) * normalize(inNormal);
   vScale = length(vNormal);
-  vUv = inUv;
+  // Four corners per billboard, (−,−) (+,−) (+,+) (−,+): the place on it from the vertex index.
+  int corner = gl_VertexID % 4;
+  vUv = vec2(corner == 1 || corner == 2 ? 1.0 : 0.0, corner >= 2 ? 1.0 : 0.0);
   vLowResUv = inLowResUv;
   vHash = inHash;
   vHalfExtents = inHalfExtents;

@@ -45,18 +45,19 @@ struct Vertex {
   glm::vec3 normal;
   glm::vec2 uv;     // over the billboard
   glm::ivec4 grid;  // first cell in the index atlas, cells
+  // The cells a fragment looks at, by how far the billboard's largest leaf reaches past its
+  // cell: 0 its own cell, 1 the 2×2 cells nearest the fragment, r + 1 the cells within r.
+  int32_t reach;
 };
 
 // The asset header's own part.
 struct AssetFields {
   glm::ivec2 indexSize{0};  // the cell index atlas
   size_t leafImages = 0;
-  int radius = 0;
   template <class V>
   void visit(V& v) {
     v("index_size", indexSize);
     v("leaf_images", leafImages);
-    v("search_radius", radius);
   }
 };
 
@@ -101,8 +102,10 @@ class SingleLeafIndirect final : public Method {
     mIndexSize = {layout.width, layout.height};
     mIndex.assign(size_t(layout.width) * layout.height, 0u);
     size_t filled = 0, represented = 0;
-    float largest = 0.0f;
+    std::vector<int32_t> reach(grids.size(), 0);
+    std::vector<size_t> billboardsPerReach(kMaxRadius + 2, 0);
     for (size_t i = 0; i < grids.size(); ++i) {
+      float largest = 0.0f;
       const SingleLeafGrid& grid = grids[i];
       float low = std::numeric_limits<float>::max(), high = std::numeric_limits<float>::lowest();
       for (size_t cell = 0; cell < grid.leaf.size(); ++cell) {
@@ -125,9 +128,14 @@ class SingleLeafIndirect final : public Method {
         }
       }
       if (i < clouds[0].billboards.size()) represented += grid.leavesPlaced;
+      // A leaf of s cell lengths centred on its cell reaches (s − 1) / 2 cells beyond it: not at
+      // all (own cell only), half a cell at most (the 2×2 cells nearest the fragment), or more.
+      const float beyond = (largest - 1.0f) * 0.5f;
+      reach[i] = beyond <= 0.0f   ? 0
+                 : beyond <= 0.5f ? 1
+                                  : 1 + std::min(kMaxRadius, static_cast<int>(std::ceil(beyond)));
+      ++billboardsPerReach[size_t(reach[i])];
     }
-    // A leaf of s cell lengths centred on its cell reaches (s − 1) / 2 cells beyond it.
-    mRadius = std::clamp(static_cast<int>(std::ceil((largest - 1.0f) * 0.5f)), 0, kMaxRadius);
     mVertices.clear();
     mIndices.clear();
     static constexpr int kU[4] = {0, 1, 1, 0}, kV[4] = {0, 0, 1, 1};
@@ -135,8 +143,8 @@ class SingleLeafIndirect final : public Method {
       const auto base = static_cast<uint32_t>(mVertices.size());
       const glm::ivec4 grid(layout.origins[i], grids[i].cells);
       for (int c = 0; c < 4; ++c) {
-        mVertices.push_back(
-            {billboards[i]->corner(c), billboards[i]->normal, glm::vec2(kU[c], kV[c]), grid});
+        mVertices.push_back({billboards[i]->corner(c), billboards[i]->normal,
+                             glm::vec2(kU[c], kV[c]), grid, reach[i]});
       }
       for (uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) mIndices.push_back(base + k);
     }
@@ -145,7 +153,7 @@ class SingleLeafIndirect final : public Method {
     mReport = {{"clouds", describeClouds(clouds)}, {"index_atlas", {layout.width, layout.height}},
                {"filled_cells", filled},           {"leaf_images", mLeafImages.size()},
                {"cell_length", cellLength},        {"leaves_represented", represented},
-               {"leaves", tree.leaves.size()},     {"search_radius", mRadius}};
+               {"leaves", tree.leaves.size()},     {"billboards_per_reach", billboardsPerReach}};
   }
 
   void upload(gl::Device& device) override {
@@ -169,6 +177,9 @@ class SingleLeafIndirect final : public Method {
     g.EnableVertexAttribArray(3);
     g.VertexAttribIPointer(3, 4, GL_INT, sizeof(Vertex),
                            reinterpret_cast<const void*>(offsetof(Vertex, grid)));
+    g.EnableVertexAttribArray(8);
+    g.VertexAttribIPointer(8, 1, GL_INT, sizeof(Vertex),
+                           reinterpret_cast<const void*>(offsetof(Vertex, reach)));
     g.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, mIbo.id());
     g.BindVertexArray(0);
     g.BindBuffer(GL_ARRAY_BUFFER, 0);
@@ -193,7 +204,6 @@ class SingleLeafIndirect final : public Method {
     setFrameUniforms(mProgram, frame);
     mProgram.set("uCells", 0);
     mProgram.set("uLeaves", 1);
-    mProgram.set("uRadius", mRadius);
     mProgram.set("uImagesPerSide", mParams.bins.tilts * mParams.bins.rotations);
     g.ActiveTexture(GL_TEXTURE0);
     g.BindTexture(GL_TEXTURE_2D, mIndexTexture.id());
@@ -216,7 +226,7 @@ class SingleLeafIndirect final : public Method {
   void save(AssetFolder& asset) const override {
     asset.describe("single_leaf_indirect", effectiveParams(), mReport);
     mLevels.save(asset);
-    asset.writeFields(AssetFields{mIndexSize, mLeafImages.size(), mRadius});
+    asset.writeFields(AssetFields{mIndexSize, mLeafImages.size()});
     asset.writeBlob("vertices.bin", mVertices);
     asset.writeBlob("indices.bin", mIndices);
     asset.writeBlob("cell_index.bin", mIndex);
@@ -234,9 +244,11 @@ class SingleLeafIndirect final : public Method {
     mVertices = asset.readBlobAs<Vertex>("vertices.bin");
     mIndices = asset.readBlobAs<uint32_t>("indices.bin");
     mIndex = asset.readBlobAs<uint32_t>("cell_index.bin");
-    mRadius = fields.radius;
-    if (mRadius < 0 || mRadius > kMaxRadius)
-      throwInputError("{}: search radius {} outside [0, {}]", folder, mRadius, kMaxRadius);
+    for (const Vertex& vertex : mVertices) {
+      if (vertex.reach < 0 || vertex.reach > kMaxRadius + 1)
+        throwInputError("{}: a billboard's reach {} is outside [0, {}]", folder, vertex.reach,
+                        kMaxRadius + 1);
+    }
     mLeafImages = asset.readImages("leaf_image_{}.png", fields.leafImages);
     if (mIndex.size() != size_t(mIndexSize.x) * mIndexSize.y)
       throwInputError("{}: cell index size mismatch", folder);
@@ -260,7 +272,6 @@ class SingleLeafIndirect final : public Method {
   glm::ivec2 mIndexSize{1, 1};
   // Per cell: 0 empty, else (image + 1) | scale · kScaleSteps << 12 | depth rank << 20.
   std::vector<uint32_t> mIndex;
-  int mRadius = 0;  // neighbouring cells a fragment looks at
   std::vector<ImageRgba8> mLeafImages;
   gl::Buffer mVbo, mIbo;
   gl::VertexArray mVao;

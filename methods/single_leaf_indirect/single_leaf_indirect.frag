@@ -1,15 +1,16 @@
 #version 430 core
 // Indirect texturing with one leaf per cell (García et al. 2005): a cell's index names a leaf
 // image at a quantized orientation, centred on the cell and as large as the leaf (its own scale,
-// so a leaf may reach into the neighbouring cells). The fragment looks at the cells within
-// uRadius of its own and keeps the opaque texel of the leaf nearest the viewer's side.
+// so a leaf may reach into the neighbouring cells). The fragment looks at the cells the
+// billboard's largest leaf can reach it from (its own; the 2×2 nearest; or a square) and keeps
+// the opaque texel of the leaf nearest the viewer's side.
 in vec3 vNormal;
 in vec2 vUv;
 flat in ivec4 vGrid;
+flat in int vReach;  // 0: own cell, 1: the 2×2 cells nearest the fragment, r + 1: within r
 
 uniform usampler2D uCells;       // R32UI: 0 empty, else image + 1 | scale·32 << 12 | depth << 20
 uniform sampler2DArray uLeaves;  // oriented leaf images, sRGB
-uniform int uRadius;             // cells around the fragment's own whose leaves can reach it
 uniform int uImagesPerSide;      // tilts × rotations: offset between front and back images
 #include "methods/common/lighting.glsl"
 
@@ -22,9 +23,17 @@ void main() {
   bool fromFront = gl_FrontFacing;  // billboards are counter-clockwise seen from their front
   float nearest = -1.0;
   vec3 color = vec3(0.0);
-  for (int dy = -uRadius; dy <= uRadius; ++dy) {
-    for (int dx = -uRadius; dx <= uRadius; ++dx) {
-      ivec2 cell = own + ivec2(dx, dy);
+  ivec2 lo = own, hi = own;
+  if (vReach == 1) {  // a leaf reaches at most half a cell past its own: from the nearest side
+    lo = own + ivec2(step(0.5, fract(grid))) - 1;
+    hi = lo + 1;
+  } else if (vReach > 1) {
+    lo = own - (vReach - 1);
+    hi = own + (vReach - 1);
+  }
+  for (int y = lo.y; y <= hi.y; ++y) {
+    for (int x = lo.x; x <= hi.x; ++x) {
+      ivec2 cell = ivec2(x, y);
       if (any(lessThan(cell, ivec2(0))) || any(greaterThanEqual(cell, vGrid.zw))) continue;
       uint word = texelFetch(uCells, vGrid.xy + cell, 0).r;
       if (word == 0u) continue;

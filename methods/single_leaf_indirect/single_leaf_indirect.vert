@@ -4,6 +4,7 @@ layout(location = 1) in vec3 inNormal;
 layout(location = 2) in vec2 inUv;      // over the billboard, [0, 1]²
 layout(location = 3) in ivec4 inGrid;   // first cell in the index atlas (xy), cells (zw)
 layout(location = 4) in mat4 inModel;   // per instance, locations 4..7
+layout(location = 8) in int inReach;    // the cells a fragment looks at (single_leaf_indirect.cpp)
 
 uniform mat4 uViewProjection;
 
@@ -11,11 +12,13 @@ out vec3 vNormal;
 out vec3 vWorldPosition;
 out vec2 vUv;
 flat out ivec4 vGrid;
+flat out int vReach;
 
 void main() {
   vNormal = mat3(inModel) * inNormal;
   vUv = inUv;
   vGrid = inGrid;
+  vReach = inReach;
   vec4 world = inModel * vec4(inPosition, 1.0);
   vWorldPosition = world.xyz;
   gl_Position = uViewProjection * world;
