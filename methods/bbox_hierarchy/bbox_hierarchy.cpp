@@ -252,7 +252,8 @@ class BboxHierarchy final : public Method {
     mIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mIndices,
                                "box and leaf indices");
     mVao = makeMeshVertexArray(mVbo, mIbo);
-    mAtlasTexture = uploadAlphaTestedTexture(device, mAtlas, true, "box images");
+    mAtlasTexture = uploadAlphaTestedTexture(device, mAtlas, true, "box images", Compression::kNone,
+                                             CoverageTarget::kLevelZeroTest);
     const ImageRgba8& first = mLeafImages.front();
     mLeafTexture = device.createTexture({GL_TEXTURE_2D_ARRAY, first.width, first.height,
                                          static_cast<int>(mLeafImages.size()), GL_SRGB8_ALPHA8,

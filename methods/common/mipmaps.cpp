@@ -92,12 +92,16 @@ double alphaTestedArea(const ImageRgba8& image, bool binary) {
 }
 
 std::vector<ImageRgba8> buildCoveragePreservingMips(const ImageRgba8& base, Compression compression,
-                                                    bool mipmaps) {
+                                                    bool mipmaps, CoverageTarget coverage) {
   const bool binary = compression == Compression::kDxt1;
   std::vector<float> alpha = alphaOf(base);
-  double covered = 0.0;
-  for (float a : alpha) covered += a;
-  const double target = alpha.empty() ? 0.0 : covered / double(alpha.size());
+  double target = 0.0;
+  if (coverage == CoverageTarget::kLevelZeroTest) {
+    target = alphaTestedArea(base, binary);
+  } else {
+    for (float a : alpha) target += a;
+    target = alpha.empty() ? 0.0 : target / double(alpha.size());
+  }
   // Linear, straight-alpha float copy of the current level, filtered down level by level.
   int width = base.width, height = base.height;
   std::vector<glm::vec4> current(alpha.size());
@@ -109,7 +113,8 @@ std::vector<ImageRgba8> buildCoveragePreservingMips(const ImageRgba8& base, Comp
   std::vector<ImageRgba8> levels;
   while (true) {
     for (size_t i = 0; i < current.size(); ++i) alpha[i] = current[i].a;
-    const float scale = areaPreservingScale(alpha, width, height, target, binary);
+    const bool keep = levels.empty() && coverage == CoverageTarget::kLevelZeroTest;
+    const float scale = keep ? 1.0f : areaPreservingScale(alpha, width, height, target, binary);
     ImageRgba8 level(width, height);
     for (size_t i = 0; i < current.size(); ++i) {
       uint8_t* out = &level.pixels[i * 4];
@@ -152,7 +157,8 @@ std::vector<ImageRgba8> buildCoveragePreservingMips(const ImageRgba8& base, Comp
 namespace {
 
 gl::Texture uploadLevels(gl::Device& device, const std::vector<ImageRgba8>& layers, GLenum target,
-                         bool mipmaps, const char* label, Compression compression) {
+                         bool mipmaps, const char* label, Compression compression,
+                         CoverageTarget coverage) {
   requireS3tcFor(compression);
   const int width = layers.empty() ? 1 : layers[0].width;
   const int height = layers.empty() ? 1 : layers[0].height;
@@ -165,7 +171,7 @@ gl::Texture uploadLevels(gl::Device& device, const std::vector<ImageRgba8>& laye
        srgbInternalFormat(compression), mipmaps, gl::MemoryCategory::kTexture, label});
   std::vector<std::vector<ImageRgba8>> chains(layers.size());
   tbb::parallel_for(size_t(0), layers.size(), [&](size_t layer) {
-    chains[layer] = buildCoveragePreservingMips(layers[layer], compression, mipmaps);
+    chains[layer] = buildCoveragePreservingMips(layers[layer], compression, mipmaps, coverage);
   });
   for (size_t layer = 0; layer < chains.size(); ++layer) {
     for (size_t level = 0; level < chains[layer].size(); ++level) {
@@ -189,13 +195,15 @@ gl::Texture uploadLevels(gl::Device& device, const std::vector<ImageRgba8>& laye
 }  // namespace
 
 gl::Texture uploadAlphaTestedTexture(gl::Device& device, const ImageRgba8& image, bool mipmaps,
-                                     const char* label, Compression compression) {
-  return uploadLevels(device, {image}, GL_TEXTURE_2D, mipmaps, label, compression);
+                                     const char* label, Compression compression,
+                                     CoverageTarget target) {
+  return uploadLevels(device, {image}, GL_TEXTURE_2D, mipmaps, label, compression, target);
 }
 
 gl::Texture uploadAlphaTestedArray(gl::Device& device, const std::vector<ImageRgba8>& layers,
                                    bool mipmaps, const char* label, Compression compression) {
-  return uploadLevels(device, layers, GL_TEXTURE_2D_ARRAY, mipmaps, label, compression);
+  return uploadLevels(device, layers, GL_TEXTURE_2D_ARRAY, mipmaps, label, compression,
+                      CoverageTarget::kCoveredArea);
 }
 
 }  // namespace canopy

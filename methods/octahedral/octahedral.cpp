@@ -120,8 +120,8 @@ class OctahedralMethod final : public Method {
 
   void upload(gl::Device& device) override {
     const Compression compression = parseCompression(mParams.compression);
-    mColorTexture =
-        uploadAlphaTestedTexture(device, mColor, mParams.mipmaps, "octahedral colour", compression);
+    mColorTexture = uploadAlphaTestedTexture(device, mColor, mParams.mipmaps, "octahedral colour",
+                                             compression, CoverageTarget::kLevelZeroTest);
     uploadDepthAndNormals(device, compression);
     mRectBuffer = device.createBuffer(gl::MemoryCategory::kGeometry, GL_SHADER_STORAGE_BUFFER,
                                       mFrameRects, "octahedral frame rectangles");

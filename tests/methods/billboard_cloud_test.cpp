@@ -227,6 +227,13 @@ TEST(CoveragePreservingMips, KeepTheCoveredAreaAfterFilteringAtEveryLevel) {
       }
     }
   }
+  // Whole-tree frames keep level 0 as captured and match its tested area further down.
+  const auto kept = buildCoveragePreservingMips(image, Compression::kNone, true,
+                                                CoverageTarget::kLevelZeroTest);
+  EXPECT_EQ(kept[0].pixels, image.pixels);
+  const double levelZeroArea = alphaTestedArea(image, false);
+  for (size_t l = 1; l <= 3; ++l)
+    EXPECT_NEAR(alphaTestedArea(kept[l], false), levelZeroArea, 0.03) << "level " << l;
 }
 
 // A billboard seen along its normal shows what the polygonal leaves of its cluster show.
