@@ -27,7 +27,7 @@ TEST_P(ViewerScreenshot, ShowsTheTreeInTheFramedRegion) {
   const auto shot = dir / "shot.png";
   std::string error;
   const int code = test::runUnderXvfb(
-      kView + " --tree sparse --leaves 300 --method " + GetParam() + quickParams(GetParam()) +
+      kView + " --tree sparse --leaves 500 --method " + GetParam() + quickParams(GetParam()) +
           " --width 320 --height 240 --frames 2 --hide-ui --screenshot " + shot.string() +
           " --bookmarks " + (dir / "b.json").string(),
       &error);
@@ -35,6 +35,7 @@ TEST_P(ViewerScreenshot, ShowsTheTreeInTheFramedRegion) {
   const ImageRgba8 image = readImage(shot);
   ASSERT_EQ(image.width, 320);
   ASSERT_EQ(image.height, 240);
+  // 500 leaves: more than the largest default K (multi-layer's 400 clusters).
   // The tree is what differs from the background (sRGB 0.5, 0.6, 0.75); the orbit camera frames
   // it from 3 radii, so it covers a good share of the image and stays inside the middle.
   long tree = 0, outside = 0;
@@ -65,7 +66,7 @@ TEST(Viewer, LitShadowedScreenshotIsTheTreeAndDarkerThanUnlit) {
     const auto shot = dir / (std::string(mode).empty() ? "unlit.png" : "shadows.png");
     std::string error;
     ASSERT_EQ(test::runUnderXvfb(kView +
-                                     " --tree sparse --leaves 300 --method multilayer_indirect"
+                                     " --tree sparse --leaves 500 --method multilayer_indirect"
                                      " --width 240 --height 200 --frames 2 --hide-ui" +
                                      mode + " --screenshot " + shot.string(),
                                  &error),
