@@ -141,14 +141,14 @@ def plot_memory_vs_psnr(rows, trees, path):
     save_figure(fig, path)
 
 
-def method_of(row):
+def method_of(row, also_memory=()):
     """The method a variant runs, with its non-memory parameters: variants that differ only in the
-    method's memory knob draw one curve."""
+    method's memory knob (or the knobs in `also_memory`) draw one curve."""
     label = row["variant"]
     match = re.search(r"\[(.*)\]$", label)
     if not match:
         return label
-    kept = [p for p in match.group(1).split(",") if p.split("=")[0] not in MEMORY_KNOBS]
+    kept = [p for p in match.group(1).split(",") if p.split("=")[0] not in MEMORY_KNOBS | set(also_memory)]
     return row["method"] + (f"[{','.join(kept)}]" if kept else "")
 
 
@@ -167,7 +167,9 @@ def plot_memory_curves(rows, trees, path):
         flip = number(row.get("flip_closeup")) or number(row.get("flip"))
         if memory is None or psnr is None or psnr >= 99.9:
             continue
-        curves.setdefault((row["tree"], method_of(row)), []).append((memory, psnr, flip))
+        # K moves a cloud method's memory as much as its texture knob (paper_fig13 sweeps both).
+        curves.setdefault((row["tree"], method_of(row, {"clusters"})), []).append(
+            (memory, psnr, flip))
     curves = {k: sorted(v) for k, v in curves.items() if len(v) >= 2}
     if not curves:
         return False
