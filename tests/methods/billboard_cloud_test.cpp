@@ -228,8 +228,8 @@ TEST(CoveragePreservingMips, KeepTheCoveredAreaAfterFilteringAtEveryLevel) {
     }
   }
   // Whole-tree frames keep level 0 as captured and match its tested area further down.
-  const auto kept = buildCoveragePreservingMips(image, Compression::kNone, true,
-                                                CoverageTarget::kLevelZeroTest);
+  const auto kept =
+      buildCoveragePreservingMips(image, Compression::kNone, true, CoverageTarget::kLevelZeroTest);
   EXPECT_EQ(kept[0].pixels, image.pixels);
   const double levelZeroArea = alphaTestedArea(image, false);
   for (size_t l = 1; l <= 3; ++l)
