@@ -53,7 +53,7 @@ constexpr int kAtlasAlignment = 8;
 class BillboardCloudMethod final : public Method {
  public:
   explicit BillboardCloudMethod(BillboardCloudParams params) : mParams(std::move(params)) {
-    mParams.cloud.validate("billboard_cloud");
+    mParams.cloud.resolve("billboard_cloud");
   }
 
   void bake(const Tree& tree, BakeContext& ctx) override {

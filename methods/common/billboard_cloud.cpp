@@ -221,11 +221,12 @@ BillboardCloud buildBillboardCloud(const Tree& tree, const ClusteringParams& par
                                    uint64_t seed) {
   const auto start = std::chrono::steady_clock::now();
   const size_t leafCount = tree.leaves.size();
-  const int k = params.clusters;
-  if (k <= 0 || size_t(k) > leafCount) {
-    throwInputError("parameter 'clusters' = {} must be in [1, {}] (the tree's leaf count)", k,
-                    leafCount);
-  }
+  if (params.clusters <= 0)
+    throwInputError("parameter 'clusters' = {} must be at least 1", params.clusters);
+  if (leafCount == 0) throwInputError("a billboard cloud needs leaves; the tree has none");
+  // A plane per leaf at most: a default K sized for full trees still works on small ones, and
+  // the report's `clusters` says how many planes there were.
+  const int k = static_cast<int>(std::min(size_t(params.clusters), leafCount));
   std::vector<LeafFeatures> leaves(leafCount);
   double leafSize = 0.0;
   for (size_t i = 0; i < leafCount; ++i) {
@@ -269,7 +270,7 @@ BillboardCloud buildBillboardCloud(const Tree& tree, const ClusteringParams& par
   std::vector<int> assignment(leafCount, -1);
   std::vector<float> cost(leafCount, 0.0f);
   BillboardCloud cloud;
-  cloud.requestedClusters = k;
+  cloud.clusters = k;
   for (int iteration = 0; iteration < params.iterations; ++iteration) {
     // Assign every leaf to its cheapest cluster (independent per leaf: parallel, deterministic).
     std::vector<int> next(leafCount);

@@ -46,7 +46,7 @@ struct Billboard {
 
 struct BillboardCloud {
   std::vector<Billboard> billboards;  // at least one per cluster (more where clusters split)
-  int requestedClusters = 0;
+  int clusters = 0;                   // planes: the requested K, at most one per leaf
   int iterationsRun = 0;
   double seconds = 0;
   float meanPlaneDistance = 0;  // over all leaf corners

@@ -12,14 +12,19 @@ void CloudLevels::addLevel(size_t billboardsBefore, size_t billboards) {
       {static_cast<uint32_t>(billboardsBefore * 6), static_cast<uint32_t>(billboards * 6)});
 }
 
-void CloudLevels::draw(const LodInstances& lod,
-                       const std::function<void(size_t level)>& prepare) const {
+void CloudLevels::draw(const LodInstances& lod, const std::function<void(size_t level)>& prepare,
+                       bool pulled) const {
   const gl::Api& g = gl::api();
   const auto& instances = lod.ranges();
   for (size_t level = 0; level < instances.size() && level < ranges.size(); ++level) {
     if (instances[level].count == 0) continue;
     if (prepare) prepare(level);
     bindInstanceMatrices(lod.buffer(), 4, instances[level].first);
+    if (pulled) {
+      g.DrawArraysInstanced(GL_TRIANGLES, static_cast<GLint>(ranges[level].first),
+                            static_cast<GLsizei>(ranges[level].count), instances[level].count);
+      continue;
+    }
     g.DrawElementsInstanced(GL_TRIANGLES, static_cast<GLsizei>(ranges[level].count),
                             GL_UNSIGNED_INT,
                             reinterpret_cast<const void*>(sizeof(uint32_t) * ranges[level].first),

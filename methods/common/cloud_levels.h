@@ -27,11 +27,15 @@ struct CloudLevels {
   void addLevel(size_t billboardsBefore, size_t billboards);
   // Draws every level's instances with the bound program and vertex array; `prepare(level)` runs
   // before a level's draw (to switch programs), the instance matrices go to locations 4–7.
-  void draw(const LodInstances& lod, const std::function<void(size_t level)>& prepare) const;
+  // `pulled`: no index buffer; DrawArrays over the same ranges (6 vertices per billboard), the
+  // vertex shader finding its billboard and corner from gl_VertexID.
+  void draw(const LodInstances& lod, const std::function<void(size_t level)>& prepare,
+            bool pulled = false) const;
 
   // The asset header's "bounds" and "levels".
   void save(AssetFolder& asset) const;
-  // Reads what save wrote and checks it against the index buffer; InputError naming the asset.
+  // Reads what save wrote and checks it against the index buffer (or 6 × the billboards, when
+  // pulled); InputError naming the asset.
   void load(AssetFolder& asset, size_t indexCount);
 };
 

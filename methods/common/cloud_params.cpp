@@ -7,7 +7,7 @@ nlohmann::json describeClouds(const std::vector<BillboardCloud>& clouds) {
   for (const BillboardCloud& cloud : clouds) {
     levels.push_back(
         {{"billboards", cloud.billboards.size()},
-         {"clusters", cloud.requestedClusters},
+         {"clusters", cloud.clusters},
          {"mean_plane_distance", cloud.meanPlaneDistance},
          {"max_plane_distance", cloud.maxPlaneDistance},
          {"mean_alignment", cloud.meanAlignment},

@@ -24,9 +24,9 @@ namespace {
 // Each field is documented where visit() names it: that text is what --list-methods and
 // docs/METHODS.md show.
 struct MultilayerParams {
-  // K = 400 and 40 cells: broadleaf 19.2 dB at 1.5 radii in 3.3 MB, against 18.6 dB for the
-  // classic cloud's K = 260 (docs/METHODS.md, "multi-layer defaults").
-  CloudParams cloud{.clustering = {.clusters = 400}};
+  // K = 1000 and 40 cells: broadleaf 20.7 dB at 1.5 radii, coverage error 0.076, in 2.9 MB,
+  // against 19.2 dB / 0.099 for K = 400 (docs/METHODS.md, "multi-layer defaults").
+  CloudParams cloud{.clustering = {.clusters = 1000}};
   int hashResolution = 40;
   int maxLayers = 64;
   int leafImageSize = 64;
@@ -70,17 +70,28 @@ struct MultilayerParams {
   }
 };
 
-// A billboard corner, 48 bytes (thousands of billboards: the bytes count against the paper's
-// memory). The corner's place on the billboard comes from gl_VertexID (four per billboard).
-struct Vertex {
-  glm::vec3 position;
-  uint32_t normal;     // 2_10_10_10 signed normalized
-  glm::vec2 lowResUv;  // location 2: the far level's mesh.vert reads it as its uv
-  int16_t hash[4];     // first cell in the hash atlas, cells
-  glm::vec2 halfExtents;
-  uint32_t tangent;    // the billboard's axisU, 2_10_10_10: with the normal, the records' frame
-  int32_t recordBase;  // the billboard's first record
+// A billboard as the vertex shader pulls it (multilayer_indirect.vert), 48 bytes: thousands of
+// billboards, and the bytes count against the paper's memory (four 48-byte corners and six
+// indices each were a third of it). Pairs of 16-bit values share a word, x in the low half.
+struct BillboardRecord {
+  glm::vec3 center{0.0f};
+  uint32_t normal = 0;          // 2_10_10_10 signed normalized
+  glm::vec2 halfExtents{0.0f};  // of the drawn rectangle (grown for parallax)
+  uint32_t tangent = 0;         // the billboard's axisU, 2_10_10_10: with the normal, its frame
+  uint32_t recordBase = 0;      // the billboard's first leaf record
+  uint32_t hashOrigin = 0;      // first cell in the hash atlas
+  uint32_t hashCells = 0;       // cells of its hash grid
+  uint32_t lowResOrigin = 0;    // first texel of its rectangle in the low-resolution atlas
+  uint32_t lowResSize = 0;      // texels of that rectangle
 };
+static_assert(sizeof(BillboardRecord) == 48);
+
+uint32_t packPair(glm::ivec2 v) {
+  return uint32_t(v.x) | (uint32_t(v.y) << 16);
+}
+glm::ivec2 unpackPair(uint32_t word) {
+  return {int(word & 0xffffu), int(word >> 16)};
+}
 
 uint32_t packSnorm10(const glm::vec3& v) {
   uint32_t word = 0;
@@ -120,13 +131,14 @@ struct AssetFields {
   }
 };
 
+constexpr int kLowResPadding = 4, kLowResAlignment = 8;  // of the low-resolution atlas
 constexpr int kFarLevel = 2;  // the K/10 cloud draws the low-resolution texture only (§5.1, §6)
 constexpr float kPi = 3.14159265358979f;
 
 class MultilayerIndirect final : public Method {
  public:
   explicit MultilayerIndirect(MultilayerParams params) : mParams(std::move(params)) {
-    mParams.cloud.validate("multilayer_indirect");
+    mParams.cloud.resolve("multilayer_indirect");
   }
 
   void bake(const Tree& tree, BakeContext& ctx) override {
@@ -175,16 +187,18 @@ class MultilayerIndirect final : public Method {
         backs[i] = captureLayered(layered[i], mLeafLayers, mParams.lowResTexelsPerCell, false);
       }
     });
-    const ImageAtlas atlas = composeAtlas(fronts, 4, 8);
-    mLowRes = {atlas.image, composeAtlas(backs, 4, 8).image};
+    const ImageAtlas atlas = composeAtlas(fronts, kLowResPadding, kLowResAlignment);
+    mLowRes = {atlas.image, composeAtlas(backs, kLowResPadding, kLowResAlignment).image};
     // §5.2 gives the far level its AO in the low-resolution texture's alpha; that alpha is the
     // alpha-tested coverage here (filtered and mipmapped), and AO written into it moves the
     // silhouette, so the AO gets its own single-channel texture at a quarter of the resolution
     // in each axis (AO is smooth; 1/16 of the atlas' texels), laid out like the colour atlas.
-    mLowResOcclusion = mParams.ambientOcclusion
-                           ? quarterResolution(composeAtlas(frontOcclusion, 4, 8).image)
-                           : ImageRgba8();
-    makeVertices(billboards, layered, atlas);
+    mLowResOcclusion =
+        mParams.ambientOcclusion
+            ? quarterResolution(
+                  composeAtlas(frontOcclusion, kLowResPadding, kLowResAlignment).image)
+            : ImageRgba8();
+    makeBillboardRecords(billboards, layered, atlas);
     size_t finestEntries = 0;
     for (size_t i = 0; i < clouds[0].billboards.size() && i < withLists; ++i)
       finestEntries += layered[i].entries.size();
@@ -202,11 +216,10 @@ class MultilayerIndirect final : public Method {
 
   void upload(gl::Device& device) override {
     using gl::MemoryCategory;
-    mVbo = device.createBuffer(MemoryCategory::kGeometry, GL_ARRAY_BUFFER, mVertices,
-                               "billboard vertices");
-    mIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mIndices,
-                               "billboard indices");
-    makeVertexArray();
+    mBillboardBuffer = device.createBuffer(MemoryCategory::kGeometry, GL_SHADER_STORAGE_BUFFER,
+                                           mBillboards, "billboards");
+    // Only the instance matrices are attributes (locations 4–7, bound per level).
+    mVao = gl::createVertexArray();
     const auto create = [&](int width, int height, GLenum format, const char* label) {
       gl::Texture texture = device.createTexture(
           {GL_TEXTURE_2D, width, height, 1, format, false, MemoryCategory::kTexture, label});
@@ -255,11 +268,13 @@ class MultilayerIndirect final : public Method {
     mFragmentText.insert(mFragmentText.find('\n') + 1,
                          fmt::format("#define RECORDS_8BIT {}\n#define PARALLAX {}\n",
                                      packed() ? 1 : 0, mParams.parallax ? 1 : 0));
-    mProgram = device.createProgram(
-        {gl::embeddedShader("methods/multilayer_indirect/multilayer_indirect.vert"),
-         {fragment.path, mFragmentText}});
+    const gl::ShaderSource& vertex =
+        gl::embeddedShader("methods/multilayer_indirect/multilayer_indirect.vert");
+    mFarVertexText = std::string(vertex.text);
+    mFarVertexText.insert(mFarVertexText.find('\n') + 1, "#define FAR_LEVEL 1\n");
+    mProgram = device.createProgram({vertex, {fragment.path, mFragmentText}});
     mFarProgram =
-        device.createProgram({gl::embeddedShader("methods/common/mesh.vert"),
+        device.createProgram({{vertex.path, mFarVertexText},
                               gl::embeddedShader("methods/common/alpha_tested_texture.frag")});
     mLod.attach(device, device.owner() + "/frame");
     if (mParams.wood.draw) mWood.upload(device, true);
@@ -270,28 +285,35 @@ class MultilayerIndirect final : public Method {
     mLod.update(frame, instances, mLevels.treeBounds, mParams.cloud.thresholds());
     const gl::Api& g = gl::api();
     g.BindVertexArray(mVao.id());
-    mLevels.draw(mLod, [&](size_t level) {
-      const bool far = level >= kFarLevel;
-      const gl::Program& program = far ? mFarProgram : mProgram;
-      program.use();
-      setFrameUniforms(program, frame);
-      if (far) {
-        program.set("uAtlas", 0);
-        program.set("uBackLayer", 1.0f);
-        program.set("uBinaryAlpha", mParams.compression == "dxt1" ? 1 : 0);
-        program.set("uOcclusion", 1);
-        program.set("uHasOcclusion", mLowResOcclusionTexture.id() ? 1 : 0);
-        g.ActiveTexture(GL_TEXTURE1);
-        g.BindTexture(GL_TEXTURE_2D, mLowResOcclusionTexture.id());
-        g.ActiveTexture(GL_TEXTURE0);
-        g.BindTexture(GL_TEXTURE_2D_ARRAY, mLowResTexture.id());
-      } else {
-        bindLayeredTextures(program);
-        program.set("uTargetPixelsPerOutputPixel", frame.targetPixelsPerOutputPixel);
-        program.set("uCameraPosition", frame.cameraPosition);
-      }
-    });
+    g.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, mBillboardBuffer.id());
+    const glm::vec2 lowResAtlasSize(mLowRes[0].width, mLowRes[0].height);
+    mLevels.draw(
+        mLod,
+        [&](size_t level) {
+          const bool far = level >= kFarLevel;
+          const gl::Program& program = far ? mFarProgram : mProgram;
+          program.use();
+          setFrameUniforms(program, frame);
+          program.set("uLowResAtlasSize", lowResAtlasSize);
+          if (far) {
+            program.set("uAtlas", 0);
+            program.set("uBackLayer", 1.0f);
+            program.set("uBinaryAlpha", mParams.compression == "dxt1" ? 1 : 0);
+            program.set("uOcclusion", 1);
+            program.set("uHasOcclusion", mLowResOcclusionTexture.id() ? 1 : 0);
+            g.ActiveTexture(GL_TEXTURE1);
+            g.BindTexture(GL_TEXTURE_2D, mLowResOcclusionTexture.id());
+            g.ActiveTexture(GL_TEXTURE0);
+            g.BindTexture(GL_TEXTURE_2D_ARRAY, mLowResTexture.id());
+          } else {
+            bindLayeredTextures(program);
+            program.set("uTargetPixelsPerOutputPixel", frame.targetPixelsPerOutputPixel);
+            program.set("uCameraPosition", frame.cameraPosition);
+          }
+        },
+        true);
     g.ActiveTexture(GL_TEXTURE0);
+    g.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
     g.BindVertexArray(0);
     if (mParams.wood.draw) mWood.draw(frame, instances, mParams.wood.errorPixels);
   }
@@ -318,8 +340,7 @@ class MultilayerIndirect final : public Method {
     }
     for (const RecordPlane& plane : mLists.planes)
       asset.writeBlob(std::string(plane.name) + ".bin", plane.data);
-    asset.writeBlob("vertices.bin", mVertices);
-    asset.writeBlob("indices.bin", mIndices);
+    asset.writeBlob("billboards.bin", mBillboards);
     asset.writeBlob("hash.bin", mLists.hash);
     asset.writeImages("leaf_image_{}.png", mLeafLayers);
     asset.writeImages("lowres_{}.png", mLowRes);
@@ -344,8 +365,7 @@ class MultilayerIndirect final : public Method {
     l.recordsHeight = fields.recordsHeight;
     l.axisScale = fields.axisScale;
     l.heightScale = fields.heightScale;
-    mVertices = asset.readBlobAs<Vertex>("vertices.bin");
-    mIndices = asset.readBlobAs<uint32_t>("indices.bin");
+    mBillboards = asset.readBlobAs<BillboardRecord>("billboards.bin");
     l.hash = asset.readBlobAs<uint32_t>("hash.bin");
     if (l.wideLists) {
       l.lists = asset.readBlobAs<uint32_t>("lists.bin");
@@ -371,8 +391,7 @@ class MultilayerIndirect final : public Method {
       throwInputError("{}: hash, lists or records blob has the wrong size", folder);
     }
     validateLoaded(folder);
-    validateIndices(mIndices, mVertices.size(), folder);
-    mLevels.load(asset, mIndices.size());
+    mLevels.load(asset, mBillboards.size() * 6);
     mWood.load(asset);
     asset.finishReading();
   }
@@ -404,9 +423,19 @@ class MultilayerIndirect final : public Method {
       if (l.lists[e] >= l.recordCount)
         throwInputError("{}: list entry names a missing leaf record", folder);
     }
-    for (const Vertex& v : mVertices) {
-      if (v.recordBase < 0 || size_t(v.recordBase) > l.recordCount)
+    const auto inside = [](glm::ivec2 origin, glm::ivec2 size, glm::ivec2 bounds) {
+      return origin.x + size.x <= bounds.x && origin.y + size.y <= bounds.y;
+    };
+    for (const BillboardRecord& b : mBillboards) {
+      if (b.recordBase > l.recordCount)
         throwInputError("{}: billboard names a missing leaf record", folder);
+      if (!inside(unpackPair(b.hashOrigin), unpackPair(b.hashCells), l.hashSize))
+        throwInputError("{}: billboard's hash cells lie outside the hash atlas", folder);
+      if (!inside(unpackPair(b.lowResOrigin), unpackPair(b.lowResSize),
+                  {mLowRes[0].width, mLowRes[0].height}))
+        throwInputError("{}: billboard's low-resolution rectangle lies outside the atlas", folder);
+      if (!std::isfinite(b.center.x + b.center.y + b.center.z + b.halfExtents.x + b.halfExtents.y))
+        throwInputError("{}: billboard with a non-finite centre or extent", folder);
     }
     for (size_t r = 0; r < l.recordCount; ++r) {
       if (decodeRecord(l, r, glm::vec2(1.0f)).image >= mLeafLayers.size() / 2)
@@ -438,60 +467,26 @@ class MultilayerIndirect final : public Method {
     return out;
   }
 
-  void makeVertices(const std::vector<const Billboard*>& billboards,
-                    const std::vector<LayeredBillboard>& layered, const ImageAtlas& atlas) {
-    mVertices.clear();
-    mIndices.clear();
-    static constexpr int kU[4] = {0, 1, 1, 0}, kV[4] = {0, 0, 1, 1};
+  void makeBillboardRecords(const std::vector<const Billboard*>& billboards,
+                            const std::vector<LayeredBillboard>& layered, const ImageAtlas& atlas) {
+    mBillboards.clear();
+    const auto fits = [](glm::ivec2 v) {
+      return v.x >= 0 && v.y >= 0 && v.x <= 65535 && v.y <= 65535;
+    };
+    if (!fits({atlas.layout.width, atlas.layout.height}))
+      throwInputError(
+          "multilayer_indirect: the low-resolution atlas outgrows 65535 texels; lower "
+          "'lowres_texels_per_cell' or 'hash_resolution'");
     for (size_t i = 0; i < billboards.size(); ++i) {
       const Billboard& b = *billboards[i];
-      const glm::vec2 half = layered[i].halfExtents;  // grown for parallax
-      const auto base = static_cast<uint32_t>(mVertices.size());
-      for (int c = 0; c < 4; ++c) {
-        const glm::vec3 corner = b.center + b.axisU * ((2.0f * kU[c] - 1.0f) * half.x) +
-                                 b.axisV * ((2.0f * kV[c] - 1.0f) * half.y);
-        const glm::ivec4 hash(mLists.hashOrigins[i], layered[i].cells);
-        if (glm::any(glm::greaterThan(hash, glm::ivec4(32767))))
-          throwInputError(
-              "multilayer_indirect: the hash atlas outgrows 32767 cells; lower "
-              "'hash_resolution'");
-        mVertices.push_back({corner,
-                             packSnorm10(b.normal),
-                             atlas.cornerUv(i, c),
-                             {int16_t(hash.x), int16_t(hash.y), int16_t(hash.z), int16_t(hash.w)},
-                             half,
-                             packSnorm10(b.axisU),
-                             static_cast<int32_t>(mLists.recordBase[i])});
-      }
-      for (uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) mIndices.push_back(base + k);
+      if (!fits(mLists.hashOrigins[i]) || !fits(layered[i].cells))
+        throwInputError(
+            "multilayer_indirect: the hash atlas outgrows 65535 cells; lower 'hash_resolution'");
+      mBillboards.push_back({b.center, packSnorm10(b.normal), layered[i].halfExtents,
+                             packSnorm10(b.axisU), static_cast<uint32_t>(mLists.recordBase[i]),
+                             packPair(mLists.hashOrigins[i]), packPair(layered[i].cells),
+                             packPair(atlas.layout.origins[i]), packPair(atlas.sizes[i])});
     }
-  }
-
-  void makeVertexArray() {
-    const gl::Api& g = gl::api();
-    mVao = gl::createVertexArray();
-    g.BindBuffer(GL_ARRAY_BUFFER, mVbo.id());
-    const auto attribute = [&](GLuint location, GLint components, GLenum type, bool normalized,
-                               size_t offset) {
-      g.EnableVertexAttribArray(location);
-      g.VertexAttribPointer(location, components, type, normalized ? GL_TRUE : GL_FALSE,
-                            sizeof(Vertex), reinterpret_cast<const void*>(offset));
-    };
-    const auto integer = [&](GLuint location, GLint components, GLenum type, size_t offset) {
-      g.EnableVertexAttribArray(location);
-      g.VertexAttribIPointer(location, components, type, sizeof(Vertex),
-                             reinterpret_cast<const void*>(offset));
-    };
-    attribute(0, 3, GL_FLOAT, false, offsetof(Vertex, position));
-    attribute(1, 4, GL_INT_2_10_10_10_REV, true, offsetof(Vertex, normal));
-    attribute(2, 2, GL_FLOAT, false, offsetof(Vertex, lowResUv));
-    integer(8, 4, GL_SHORT, offsetof(Vertex, hash));
-    attribute(9, 2, GL_FLOAT, false, offsetof(Vertex, halfExtents));
-    attribute(10, 4, GL_INT_2_10_10_10_REV, true, offsetof(Vertex, tangent));
-    integer(11, 1, GL_INT, offsetof(Vertex, recordBase));
-    g.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, mIbo.id());
-    g.BindVertexArray(0);
-    g.BindBuffer(GL_ARRAY_BUFFER, 0);
   }
 
   void bindLayeredTextures(const gl::Program& program) const {
@@ -528,14 +523,14 @@ class MultilayerIndirect final : public Method {
   MultilayerParams mParams;
   nlohmann::json mReport;
   CloudLevels mLevels;
-  std::vector<Vertex> mVertices;
-  std::vector<uint32_t> mIndices;
+  std::vector<BillboardRecord> mBillboards;
   ListTextures mLists;
   std::vector<ImageRgba8> mLeafLayers;  // leaf image i: front 2i, back 2i + 1
   std::vector<ImageRgba8> mLowRes;      // the low-resolution atlas seen from the front, the back
   ImageRgba8 mLowResOcclusion;          // AO of the low-resolution atlas at a quarter (R)
   std::string mFragmentText;            // the fragment shader with its variant's defines
-  gl::Buffer mVbo, mIbo;
+  std::string mFarVertexText;           // the vertex shader for the far level
+  gl::Buffer mBillboardBuffer;          // mBillboards, pulled by the vertex shader
   gl::VertexArray mVao;
   gl::Texture mHashTexture, mListsTexture, mLeavesTexture, mLowResTexture, mLowResOcclusionTexture;
   std::vector<gl::Texture> mRecordTextures;  // one per record plane, ambient occlusion last

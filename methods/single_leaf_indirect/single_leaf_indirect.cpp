@@ -67,7 +67,7 @@ constexpr int kMaxRadius = 3;    // larger leaves are clipped to 7×7 cells
 class SingleLeafIndirect final : public Method {
  public:
   explicit SingleLeafIndirect(SingleLeafParams params) : mParams(params) {
-    mParams.cloud.validate("single_leaf_indirect");
+    mParams.cloud.resolve("single_leaf_indirect");
   }
 
   void bake(const Tree& tree, BakeContext& ctx) override {

@@ -138,7 +138,7 @@ TEST_F(Clustering, IsDeterministicAndUsesOrientation) {
 
 TEST(ClusteringBadInput, ClusterCountOutOfRangeNamesTheParameter) {
   const Tree tree = test::smallTree(50);
-  for (int k : {0, -3, 51}) {
+  for (int k : {0, -3}) {
     ClusteringParams params;
     params.clusters = k;
     try {
@@ -153,6 +153,20 @@ TEST(ClusteringBadInput, ClusterCountOutOfRangeNamesTheParameter) {
   EXPECT_THROW(create({{"density", 0.0}}, "test"), InputError);
   EXPECT_THROW(create({{"density", -5.0}}, "test"), InputError);
   EXPECT_THROW(create({{"lod_near_px", 30.0}, {"lod_far_px", 60.0}}, "test"), InputError);
+}
+
+TEST(ClusteringSmallTree, MoreClustersThanLeavesGivesOnePlanePerLeaf) {
+  const Tree tree = test::smallTree(50);
+  ClusteringParams params;
+  params.clusters = 400;  // a default sized for full trees
+  const BillboardCloud cloud = buildBillboardCloud(tree, params, 1);
+  EXPECT_EQ(cloud.clusters, 50);
+  size_t listed = 0;
+  for (const Billboard& billboard : cloud.billboards) {
+    EXPECT_EQ(billboard.leaves.size(), 1u);
+    listed += billboard.leaves.size();
+  }
+  EXPECT_EQ(listed, tree.leaves.size());
 }
 
 TEST(MinimumAreaRectangle, FindsTheRotatedRectangle) {
