@@ -443,6 +443,44 @@ TEST(MultilayerIndirect, EightBitRecordsDrawLikeFloatRecordsInHalfTheMemoryAndSu
   EXPECT_EQ(harness.render(*loaded, camera), packed);
 }
 
+TEST(MultilayerIndirect, BillboardsCostOneRecordEachAndCorruptRecordsNameTheAsset) {
+  const Tree tree = test::smallTree(400, 5);
+  VariantBench bench(96);
+  const auto method = bench.bake(tree, {{"clusters", 30}, {"lod", false}, {"wood", false}}, "ml");
+  // No vertex or index buffer: the geometry is the billboards' 48-byte records.
+  const auto billboards = method->bakeReport().at("clouds")[0].at("billboards").get<uint64_t>();
+  EXPECT_EQ(bench.ledger.totals("ml").geometry, billboards * 48);
+
+  test::TempDir dir;
+  {
+    AssetFolder asset(dir.path());
+    method->save(asset);
+  }
+  const std::filesystem::path blob = dir / "billboards.bin";
+  std::string bytes = test::readText(blob);
+  ASSERT_EQ(bytes.size(), billboards * 48);
+  const auto expectLoadError = [&](const std::string& contents, const std::string& what) {
+    test::writeText(blob, contents);
+    auto loaded =
+        builtinMethods().find("multilayer_indirect").create(method->effectiveParams(), "t");
+    AssetFolder reader(dir.path());
+    try {
+      loaded->load(reader);
+      ADD_FAILURE() << what << " loaded";
+    } catch (const InputError& error) {
+      EXPECT_NE(std::string(error.what()).find(dir.path().string()), std::string::npos)
+          << what << ": " << error.what();
+    }
+  };
+  expectLoadError(bytes.substr(0, bytes.size() - 5), "truncated");
+  std::string outside = bytes;
+  outside[36] = outside[37] = outside[38] = outside[39] = '\xff';  // hash cells of the first
+  expectLoadError(outside, "hash cells outside the atlas");
+  std::string missing = bytes;
+  missing[28] = missing[29] = missing[30] = missing[31] = '\x7f';  // its first leaf record
+  expectLoadError(missing, "a missing leaf record");
+}
+
 TEST(MultilayerIndirect, BadParametersNameTheParameter) {
   test::expectParameterErrorsNameTheKey("multilayer_indirect", {{"hash_resolution", 0},
                                                                 {"max_layers", 256},
