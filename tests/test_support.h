@@ -163,4 +163,18 @@ inline void expectParameterErrorsNameTheKey(
   }
 }
 
+// Loading the asset in `folder` into `method` must be an InputError naming the folder (a corrupt
+// or truncated asset); `what` names the corruption in failure messages.
+inline void expectLoadErrorNamesTheFolder(Method& method, const std::filesystem::path& folder,
+                                          const std::string& what) {
+  AssetFolder reader(folder);
+  try {
+    method.load(reader);
+    ADD_FAILURE() << what << " was accepted";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find(folder.string()), std::string::npos)
+        << what << ": " << error.what();
+  }
+}
+
 }  // namespace canopy::test

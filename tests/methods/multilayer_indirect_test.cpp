@@ -463,14 +463,7 @@ TEST(MultilayerIndirect, BillboardsCostOneRecordEachAndCorruptRecordsNameTheAsse
     test::writeText(blob, contents);
     auto loaded =
         builtinMethods().find("multilayer_indirect").create(method->effectiveParams(), "t");
-    AssetFolder reader(dir.path());
-    try {
-      loaded->load(reader);
-      ADD_FAILURE() << what << " loaded";
-    } catch (const InputError& error) {
-      EXPECT_NE(std::string(error.what()).find(dir.path().string()), std::string::npos)
-          << what << ": " << error.what();
-    }
+    test::expectLoadErrorNamesTheFolder(*loaded, dir.path(), what);
   };
   expectLoadError(bytes.substr(0, bytes.size() - 5), "truncated");
   std::string outside = bytes;
