@@ -143,12 +143,16 @@ def plot_memory_vs_psnr(rows, trees, path):
 
 def method_of(row, also_memory=()):
     """The method a variant runs, with its non-memory parameters: variants that differ only in the
-    method's memory knob (or the knobs in `also_memory`) draw one curve."""
+    method's memory knob draw one curve; so do those that differ only in a knob of `also_memory`,
+    unless the variant sets the memory knob too (then each value of it is a curve of its own)."""
     label = row["variant"]
     match = re.search(r"\[(.*)\]$", label)
     if not match:
         return label
-    kept = [p for p in match.group(1).split(",") if p.split("=")[0] not in MEMORY_KNOBS | set(also_memory)]
+    params = match.group(1).split(",")
+    sets_knob = any(p.split("=")[0] in MEMORY_KNOBS for p in params)
+    dropped = MEMORY_KNOBS if sets_knob else MEMORY_KNOBS | set(also_memory)
+    kept = [p for p in params if p.split("=")[0] not in dropped]
     return row["method"] + (f"[{','.join(kept)}]" if kept else "")
 
 
