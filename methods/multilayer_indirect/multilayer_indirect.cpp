@@ -132,7 +132,7 @@ struct AssetFields {
 };
 
 constexpr int kLowResPadding = 4, kLowResAlignment = 8;  // of the low-resolution atlas
-constexpr int kFarLevel = 2;  // the K/10 cloud draws the low-resolution texture only (§5.1, §6)
+constexpr int kFarLevel = 2;  // the far cloud draws the low-resolution texture only (§5.1, §6)
 constexpr float kPi = 3.14159265358979f;
 
 class MultilayerIndirect final : public Method {
