@@ -31,6 +31,7 @@ struct MultilayerParams {
   int maxLayers = 64;
   int leafImageSize = 64;
   float lodFactor = 1.0f;
+  std::string lowResFallback = "all";
   int lowResTexelsPerCell = 1;
   bool ambientOcclusion = true;
   int aoRays = 32;
@@ -51,6 +52,10 @@ struct MultilayerParams {
       "texels per side of each leaf image (front and back per leaf texture)");
     v("lod_factor", lodFactor, 0.0f, 1000.0f,
       "shader LoD: list entries walked = factor × projected hash-texel diagonal (px); 0: all");
+    v("lowres_fallback", lowResFallback, {"all", "rest"},
+      "after a shortened walk missed, the low-resolution texel's coverage a as captured, of all "
+      "the cell's leaves (§5.1), or of the share not walked only (rest: 1 - (1 - a)^share, "
+      "leaves overlapping independently)");
     v("lowres_texels_per_cell", lowResTexelsPerCell, 1, 16,
       "low-resolution texture texels per hash cell side");
     v("ambient_occlusion", ambientOcclusion,
@@ -498,6 +503,7 @@ class MultilayerIndirect final : public Method {
     program.set("uLowResOcclusion", 4);
     program.set("uHasLowResOcclusion", mLowResOcclusionTexture.id() ? 1 : 0);
     program.set("uLodFactor", mParams.lodFactor);
+    program.set("uLowResRestOnly", mParams.lowResFallback == "rest" ? 1 : 0);
     program.set("uBinaryAlpha", mParams.compression == "dxt1" ? 1 : 0);
     program.set("uAxisScale", mLists.axisScale);
     program.set("uHeightScale", mLists.heightScale);

@@ -32,6 +32,7 @@ uniform sampler2DArray uLeaves;  // leaf images, sRGB: image i front at 2i, back
 uniform sampler2DArray uLowRes;  // the layered representation at low resolution: front, back
 uniform sampler2D uAmbientOcclusion;  // per record: ambient term at the leaf's four corners
 uniform float uLodFactor;        // entries = factor × projected hash-texel diagonal (px); 0: all
+uniform int uLowResRestOnly;     // lowres_fallback "rest": the texel covers the unwalked leaves
 uniform float uTargetPixelsPerOutputPixel;  // supersampling: derivatives count target pixels
 uniform vec3 uCameraPosition;
 uniform mat4 uViewProjection;
@@ -174,7 +175,13 @@ void main() {
   }
   if (budget < listLength) {
     vec4 texel = texture(uLowRes, vec3(vLowResUv, fromFront ? 0.0 : 1.0));
-    if (texel.a >= 0.5) {
+    // The texel's coverage a counts every leaf of the cell, the walked ones too, which missed
+    // this fragment. The rest, a share r of the list, covers 1 - (1 - a)^r of the texel if
+    // leaves overlap independently; testing a itself counts the walked leaves twice.
+    float coverage = texel.a;
+    if (uLowResRestOnly != 0)
+      coverage = 1.0 - pow(max(1.0 - texel.a, 0.0), float(listLength - budget) / float(listLength));
+    if (coverage >= 0.5) {
       if (uBinaryAlpha != 0) texel.rgb /= texel.a;
 #if PARALLAX
       gl_FragDepth = gl_FragCoord.z;

@@ -398,6 +398,31 @@ TEST(MultilayerIndirect, ShaderLodWithAllEntriesEqualsFullEvaluation) {
   EXPECT_NE(renderBoth(tree, stingy, {0, 0, 1}, {0, 1, 0}, 20.0f).method, full.method);
 }
 
+// A shortened walk that missed takes the rest of the list from the low-resolution texel, whose
+// coverage a counts every leaf of the cell, the walked ones too. lowres_fallback "rest" counts
+// only the leaves not walked, 1 - (1 - a)^share <= a: it keeps a subset of what "all" keeps, and
+// less wherever walks are shortened.
+TEST(MultilayerIndirect, LowResolutionFallbackRestKeepsASubsetOfAll) {
+  const Tree tree = test::smallTree(800, 4);
+  const auto render = [&](const char* fallback) {
+    const nlohmann::json params = {{"clusters", 20},
+                                   {"lod", false},
+                                   {"wood", false},
+                                   {"lod_factor", 0.05},
+                                   {"lowres_fallback", fallback}};
+    return renderBoth(tree, params, {0, 0, 1}, {0, 1, 0}).method;
+  };
+  const ImageRgba8 rest = render("rest"), all = render("all");
+  long restCovered = 0, allCovered = 0, outside = 0;
+  for (size_t i = 3; i < rest.pixels.size(); i += 4) {
+    restCovered += rest.pixels[i];
+    allCovered += all.pixels[i];
+    outside += rest.pixels[i] > all.pixels[i];
+  }
+  EXPECT_EQ(outside, 0) << "pixels more covered with rest than with all";
+  EXPECT_LT(restCovered, allCovered);
+}
+
 TEST(MultilayerIndirect, EightBitRecordsDrawLikeFloatRecordsInHalfTheMemoryAndSurviveSaveLoad) {
   const Tree tree = test::smallTree(800, 4);
   VariantBench bench(160);
