@@ -30,6 +30,8 @@ struct BboxParams {
   int minBoxLeaves = 16;
   int spatialLeaves = 200;
   int supersample = 4;
+  std::string compression = "dxt5";
+  float textureBudgetMb = 2.0f;
   WoodParams wood;
 
   template <class Visitor>
@@ -49,6 +51,12 @@ struct BboxParams {
     v("spatial_leaves", spatialLeaves, 1, 1000000,
       "spatial hierarchy: at most this many leaves per finest box");
     v("supersample", supersample, 1, 8, "capture samples per texel side");
+    v("compression", compression, {"none", "dxt1", "dxt5"},
+      "the box images: uncompressed, BC1 or BC3 (S3TC)");
+    v("texture_budget_mb", textureBudgetMb, 0.0f, 100000.0f,
+      "box images, as stored with their mip levels, within this many MB: the finest boxes "
+      "(fewest leaves first) lose theirs, so the memory does not grow with the tree (the root "
+      "keeps its images); 0: no bound");
     wood.visit(v);
   }
 };
@@ -129,6 +137,8 @@ std::array<Billboard, 6> boxQuads(const Aabb& box, bool diagonal) {
   return quads;
 }
 
+constexpr int kAtlasPadding = 4, kAtlasAlignment = 8;  // of the box image atlas
+
 class BboxHierarchy final : public Method {
  public:
   explicit BboxHierarchy(BboxParams params) : mParams(std::move(params)) {}
@@ -158,16 +168,11 @@ class BboxHierarchy final : public Method {
     if (mHierarchy.nodes.empty()) mHierarchy = spatialHierarchy(tree, mParams.spatialLeaves);
     pruneByVolumeRatio(mHierarchy, mParams.volumeRatio,
                        static_cast<uint32_t>(mParams.minBoxLeaves));
-    // Six images per textured box (§3.2.2): the leaves of its subtree, orthographically.
+    const size_t droppedByBudget = applyTextureBudget();
+    // Six images per textured box (§3.2.2): the leaves of its subtree, orthographically, coarse
+    // to fine in the atlas (§1, §6: progressive transmission).
     const LeafImageSampler sampler(tree);
-    std::vector<int32_t> textured;
-    for (size_t n = 0; n < mHierarchy.nodes.size(); ++n) {
-      if (mHierarchy.nodes[n].textured) textured.push_back(static_cast<int32_t>(n));
-    }
-    // Coarse to fine (§1, §6: progressive transmission): images ordered by level.
-    std::stable_sort(textured.begin(), textured.end(), [&](int32_t a, int32_t b) {
-      return mHierarchy.nodes[a].level < mHierarchy.nodes[b].level;
-    });
+    const std::vector<int32_t> textured = texturedCoarseToFine(mHierarchy);
     std::vector<ImageRgba8> images(textured.size() * 6);
     std::vector<std::array<Billboard, 6>> quads(textured.size());
     tbb::parallel_for(size_t(0), textured.size(), [&](size_t t) {
@@ -181,7 +186,7 @@ class BboxHierarchy final : public Method {
                                       mParams.textureSize, mParams.supersample);
       }
     });
-    const ImageAtlas atlas = composeAtlas(images, 4, 8);
+    const ImageAtlas atlas = composeAtlas(images, kAtlasPadding, kAtlasAlignment);
     mAtlas = atlas.image;
     // Geometry: box quads (24 vertices each box), then one quad per leaf in hierarchy order.
     mVertices.clear();
@@ -226,12 +231,14 @@ class BboxHierarchy final : public Method {
       mLeafImages.push_back(
           t.back.width == t.front.width && t.back.height == t.front.height ? t.back : t.front);
     }
-    // Report: textured boxes and texture memory per level (§3.2.4), bytes per level on disk order.
+    // Report: textured boxes and their texels' GPU bytes per level (§3.2.4; level 0 of the mip
+    // chains, without the atlas padding).
     std::map<int32_t, std::pair<int, uint64_t>> perLevel;
     for (int32_t n : textured) {
       auto& [boxes, bytes] = perLevel[mHierarchy.nodes[n].level];
       ++boxes;
-      bytes += 6ull * mParams.textureSize * mParams.textureSize * 4;
+      bytes += static_cast<uint64_t>(6.0 * mParams.textureSize * mParams.textureSize *
+                                     atlasBytesPerTexel());
     }
     nlohmann::json levels = nlohmann::json::array();
     for (const auto& [level, value] : perLevel)
@@ -240,6 +247,7 @@ class BboxHierarchy final : public Method {
     mReport = {{"hierarchy", mHierarchy.source},
                {"boxes", mHierarchy.nodes.size()},
                {"textured_boxes", textured.size()},
+               {"boxes_over_texture_budget", droppedByBudget},
                {"levels", levels},
                {"atlas", {atlas.layout.width, atlas.layout.height}}};
     mTextured = textured;
@@ -252,7 +260,8 @@ class BboxHierarchy final : public Method {
     mIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER, mIndices,
                                "box and leaf indices");
     mVao = makeMeshVertexArray(mVbo, mIbo);
-    mAtlasTexture = uploadAlphaTestedTexture(device, mAtlas, true, "box images", Compression::kNone,
+    mAtlasTexture = uploadAlphaTestedTexture(device, mAtlas, true, "box images",
+                                             parseCompression(mParams.compression),
                                              CoverageTarget::kLevelZeroTest);
     const ImageRgba8& first = mLeafImages.front();
     mLeafTexture = device.createTexture({GL_TEXTURE_2D_ARRAY, first.width, first.height,
@@ -307,6 +316,7 @@ class BboxHierarchy final : public Method {
     mProgram.use();
     setFrameUniforms(mProgram, frame);
     mProgram.set("uAtlas", 0);
+    mProgram.set("uBinaryAlpha", mParams.compression == "dxt1" ? 1 : 0);
     mProgram.set("uLeafImages", 1);
     mProgram.set("uTwoSided",
                  mLeafImages.size() >= 2 && mLeafImages[0].pixels != mLeafImages[1].pixels ? 1 : 0);
@@ -412,6 +422,38 @@ class BboxHierarchy final : public Method {
   }
 
  private:
+  // Bytes a box image texel takes on the GPU as `compression` stores it.
+  double atlasBytesPerTexel() const {
+    return mParams.compression == "none" ? 4.0 : mParams.compression == "dxt1" ? 0.5 : 1.0;
+  }
+
+  // Drops the finest boxes' images until the atlas, packed as bake() packs it and stored with
+  // its mip levels (a third more) in `compression`, fits `texture_budget_mb`. Returns how many
+  // boxes lost their images.
+  size_t applyTextureBudget() {
+    const size_t candidates = texturedCoarseToFine(mHierarchy).size();
+    if (mParams.textureBudgetMb <= 0.0f || candidates == 0) return 0;
+    const double bytesPerTexel = atlasBytesPerTexel();
+    const auto bytes = [&](size_t boxes) {
+      const std::vector<glm::ivec2> sizes(boxes * 6, glm::ivec2(mParams.textureSize));
+      const AtlasLayout layout = packAtlas(sizes, kAtlasPadding, kAtlasAlignment);
+      return double(layout.width) * layout.height * bytesPerTexel * 4.0 / 3.0;
+    };
+    const double budget = double(mParams.textureBudgetMb) * 1e6;
+    // The largest count that fits (at least the root's box): packing grows with the count.
+    size_t lo = 1, hi = candidates;
+    while (lo < hi) {
+      const size_t mid = (lo + hi + 1) / 2;
+      if (bytes(mid) <= budget) {
+        lo = mid;
+      } else {
+        hi = mid - 1;
+      }
+    }
+    keepTexturedBoxes(mHierarchy, lo);
+    return candidates - lo;
+  }
+
   // Every index the walk and the draws follow, checked so a corrupt asset cannot read past a
   // buffer; InputError naming the folder.
   void validateNodes(const std::string& folder) const {

@@ -9,6 +9,9 @@ uniform int uLeafMode;               // 0: box image from uAtlas; 1: leaf from u
 uniform sampler2D uAtlas;
 uniform sampler2DArray uLeafImages;  // per leaf texture k: layer 2k front, 2k + 1 back
 uniform int uTwoSided;               // 1 when back images differ from the front
+// 1 when the atlas is BC1, whose transparent texels decode as black: dividing the filtered
+// colour by the filtered alpha gives the covered texels' own colour.
+uniform int uBinaryAlpha;
 #include "methods/common/lighting.glsl"
 
 out vec4 outColor;
@@ -33,7 +36,7 @@ void main() {
     texel = texture(uLeafImages, vec3(uv, layer));
   }
   if (texel.a < 0.5) discard;
-  vec3 color = texel.rgb;
+  vec3 color = uLeafMode == 0 && uBinaryAlpha != 0 ? texel.rgb / texel.a : texel.rgb;
   if (uLit != 0) {
     vec3 normal = normalize(gl_FrontFacing ? vNormal : -vNormal);
     color *= lighting(normal, 1.0);

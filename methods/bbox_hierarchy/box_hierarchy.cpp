@@ -256,6 +256,26 @@ void pruneByVolumeRatio(BoxHierarchy& hierarchy, float threshold, uint32_t minLe
   }
 }
 
+std::vector<int32_t> texturedCoarseToFine(const BoxHierarchy& hierarchy) {
+  std::vector<int32_t> order;
+  for (size_t n = 0; n < hierarchy.nodes.size(); ++n)
+    if (hierarchy.nodes[n].textured) order.push_back(static_cast<int32_t>(n));
+  const auto leaves = [&](int32_t n) {
+    return hierarchy.nodes[n].subtreeLeafEnd - hierarchy.nodes[n].leafBegin;
+  };
+  std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) {
+    const BoxNode &x = hierarchy.nodes[a], &y = hierarchy.nodes[b];
+    return x.level != y.level ? x.level < y.level : leaves(a) > leaves(b);
+  });
+  return order;
+}
+
+void keepTexturedBoxes(BoxHierarchy& hierarchy, size_t keep) {
+  const std::vector<int32_t> order = texturedCoarseToFine(hierarchy);
+  for (size_t i = std::max<size_t>(keep, 1); i < order.size(); ++i)
+    hierarchy.nodes[order[i]].textured = false;
+}
+
 void walkHierarchy(const BoxHierarchy& hierarchy, const std::vector<float>& lodDistance,
                    const glm::vec3& viewer, HierarchyWalk& walk) {
   walk.boxes.clear();

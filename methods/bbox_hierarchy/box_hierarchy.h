@@ -48,6 +48,14 @@ BoxHierarchy spatialHierarchy(const Tree& tree, int maxLeaves);
 // boxes whose few leaves are cheaper drawn as polygons).
 void pruneByVolumeRatio(BoxHierarchy& hierarchy, float threshold, uint32_t minLeaves = 1);
 
+// The textured boxes in the order they keep their images under a memory bound: coarse levels
+// first (§1, §6: progressive transmission), within a level the boxes holding more leaves.
+std::vector<int32_t> texturedCoarseToFine(const BoxHierarchy& hierarchy);
+// Keeps the images of the first `keep` boxes of texturedCoarseToFine (at least the root's); the
+// others become untextured, so the walk opens them. Not in the paper, whose hierarchy has a box
+// per branch: with one per branch texture memory would grow with the tree.
+void keepTexturedBoxes(BoxHierarchy& hierarchy, size_t keep);
+
 // The walk of Fig. 4: a textured box whose distance to the viewer exceeds its LoD distance is
 // drawn as its images and its subtree skipped; otherwise its own leaves are drawn as polygons
 // and its children visited. Untextured boxes are always opened.

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
 #include <set>
 
 #include <glm/geometric.hpp>
@@ -119,6 +120,26 @@ TEST(BoxHierarchy, VolumeRatioPruningKeepsTheRootAndPrunesSmallBoxes) {
   EXPECT_TRUE(h.nodes[0].textured);
 }
 
+TEST(BoxHierarchy, KeepingFewerTexturedBoxesDropsTheFinestFirst) {
+  const Tree tree = test::smallTree(1200, 3);
+  BoxHierarchy h = hierarchyFromBranches(tree);
+  pruneByVolumeRatio(h, 0.0f);
+  const std::vector<int32_t> order = texturedCoarseToFine(h);
+  ASSERT_GT(order.size(), 4u);
+  EXPECT_EQ(order[0], 0) << "the root first";
+  for (size_t i = 1; i < order.size(); ++i) {
+    const BoxNode &a = h.nodes[order[i - 1]], &b = h.nodes[order[i]];
+    EXPECT_TRUE(a.level < b.level || (a.level == b.level && a.subtreeLeafEnd - a.leafBegin >=
+                                                                b.subtreeLeafEnd - b.leafBegin));
+  }
+  const size_t keep = order.size() / 2;
+  keepTexturedBoxes(h, keep);
+  for (size_t i = 0; i < order.size(); ++i) EXPECT_EQ(h.nodes[order[i]].textured, i < keep);
+  keepTexturedBoxes(h, 0);  // the root keeps its images whatever the bound
+  EXPECT_TRUE(h.nodes[0].textured);
+  EXPECT_EQ(texturedCoarseToFine(h).size(), 1u);
+}
+
 TEST(BoxHierarchy, TheWalkDrawsEveryLeafExactlyOnceAtAnyDistance) {
   const Tree tree = test::smallTree(1200, 3);
   for (BoxHierarchy h : hierarchiesOf(tree)) {
@@ -200,12 +221,54 @@ TEST(BboxHierarchy, BoxImageMatchesTheLeavesInsideTheBox) {
   EXPECT_LT(metrics.coverageError, 0.25);
 }
 
+// The box images fit texture_budget_mb whatever the tree: a tree with eight times the leaves has
+// more boxes worth images, and under the bound its finest boxes lose theirs, so its texture memory
+// (ledger) stays that of the small tree, while without one it grows with the leaves.
+TEST(BboxHierarchy, TextureMemoryDoesNotGrowWithTheLeavesUnderTheBudget) {
+  auto context = test::makeTestContext();
+  gl::Ledger ledger;
+  gl::Device device(ledger);
+  LSystemTreeParams params = treePreset("broadleaf");
+  params.leafTextureSize = 32;
+  const double budgetMb = 0.3;  // below what either tree's boxes would take
+  std::map<int, uint64_t> bounded, unbounded;
+  for (const int leaves : {1000, 8000}) {
+    params.leaves = leaves;
+    const Tree tree = generateTree(params, 1);
+    for (const double budget : {0.0, budgetMb}) {
+      const std::string owner = "bbox " + std::to_string(leaves) + " " + std::to_string(budget);
+      auto method = test::bakeAndUpload(device, tree, "bbox_hierarchy",
+                                        {{"wood", false}, {"texture_budget_mb", budget}},
+                                        Shading::kUnlit, owner);
+      (budget > 0.0 ? bounded : unbounded)[leaves] = ledger.totals(owner).texture;
+      const nlohmann::json report = method->bakeReport();
+      if (budget > 0.0) {
+        EXPECT_GT(report["boxes_over_texture_budget"].get<int>(), 0) << leaves << " leaves";
+        // BC3: one byte a texel, a third more for the mip levels.
+        const double atlasBytes =
+            report["atlas"][0].get<double>() * report["atlas"][1].get<double>() * 4.0 / 3.0;
+        EXPECT_LE(atlasBytes, budget * 1e6) << leaves << " leaves";
+      } else {
+        EXPECT_EQ(report["boxes_over_texture_budget"].get<int>(), 0);
+      }
+    }
+  }
+  std::printf("texture bytes, 1000 / 8000 leaves: %llu / %llu unbounded, %llu / %llu bounded\n",
+              (unsigned long long)unbounded[1000], (unsigned long long)unbounded[8000],
+              (unsigned long long)bounded[1000], (unsigned long long)bounded[8000]);
+  EXPECT_GT(unbounded[8000], 2 * unbounded[1000]);
+  // The same leaf images and an atlas of the same bound: within the packing's slack.
+  EXPECT_LT(double(bounded[8000]), 1.25 * double(bounded[1000]));
+}
+
 TEST(BboxHierarchy, BadParametersNameTheParameter) {
   test::expectParameterErrorsNameTheKey("bbox_hierarchy", {{"texture_size", 0},
                                                            {"volume_ratio", 2.0},
                                                            {"arrangement", "star"},
                                                            {"hierarchy", "octree"},
-                                                           {"transition", -1.0}});
+                                                           {"transition", -1.0},
+                                                           {"compression", "bc7"},
+                                                           {"texture_budget_mb", -1.0}});
 }
 
 }  // namespace
