@@ -10,6 +10,7 @@
 #include <glm/gtc/matrix_inverse.hpp>
 
 #include "common/config.h"
+#include "common/gl/ledger.h"
 #include "methods/bbox_hierarchy/box_hierarchy.h"
 #include "methods/common/leaf_capture.h"
 #include "methods/common/lod_instances.h"
@@ -237,8 +238,7 @@ class BboxHierarchy final : public Method {
     for (int32_t n : textured) {
       auto& [boxes, bytes] = perLevel[mHierarchy.nodes[n].level];
       ++boxes;
-      bytes += static_cast<uint64_t>(6.0 * mParams.textureSize * mParams.textureSize *
-                                     atlasBytesPerTexel());
+      bytes += 6 * boxImageBytes(mParams.textureSize, mParams.textureSize);
     }
     nlohmann::json levels = nlohmann::json::array();
     for (const auto& [level, value] : perLevel)
@@ -422,9 +422,11 @@ class BboxHierarchy final : public Method {
   }
 
  private:
-  // Bytes a box image texel takes on the GPU as `compression` stores it.
-  double atlasBytesPerTexel() const {
-    return mParams.compression == "none" ? 4.0 : mParams.compression == "dxt1" ? 0.5 : 1.0;
+  // GPU bytes of one w × h level of the box images as `compression` stores them (the ledger's
+  // own count).
+  uint64_t boxImageBytes(int width, int height) const {
+    return gl::textureLevelBytes(srgbInternalFormat(parseCompression(mParams.compression)), width,
+                                 height, 1);
   }
 
   // Drops the finest boxes' images until the atlas, packed as bake() packs it and stored with
@@ -433,11 +435,10 @@ class BboxHierarchy final : public Method {
   size_t applyTextureBudget() {
     const size_t candidates = texturedCoarseToFine(mHierarchy).size();
     if (mParams.textureBudgetMb <= 0.0f || candidates == 0) return 0;
-    const double bytesPerTexel = atlasBytesPerTexel();
     const auto bytes = [&](size_t boxes) {
       const std::vector<glm::ivec2> sizes(boxes * 6, glm::ivec2(mParams.textureSize));
       const AtlasLayout layout = packAtlas(sizes, kAtlasPadding, kAtlasAlignment);
-      return double(layout.width) * layout.height * bytesPerTexel * 4.0 / 3.0;
+      return double(boxImageBytes(layout.width, layout.height)) * 4.0 / 3.0;
     };
     const double budget = double(mParams.textureBudgetMb) * 1e6;
     // The largest count that fits (at least the root's box): packing grows with the count.
