@@ -430,8 +430,12 @@ def sweep_groups(variants):
 
 def plot_sweep(rows, tree, key, group, path):
     """One numeric parameter's sweep: PSNR (left axis) and FLIP (right axis) against its value,
-    each point labelled with the variant's GPU memory (the papers' trade-off figures, e.g. the
-    volumetric paper's Fig. 10 for the cutoff). False when the values are not all numbers."""
+    each point labelled with the variant's GPU memory and its speedup at the largest forest the
+    run timed (the papers' trade-off figures, e.g. the volumetric paper's Fig. 10 for the cutoff;
+    a quality/speed curve for LoD knobs). False when the values are not all numbers."""
+    forest_sizes = sorted(int(k[len("speedup_vs_polygonal_n"):]) for k in (rows[0] if rows else {})
+                          if k.startswith("speedup_vs_polygonal_n"))
+    speed_key = f"speedup_vs_polygonal_n{forest_sizes[-1]}" if forest_sizes else None
     points = []
     for row in rows:
         if row["tree"] != tree or row["variant"] not in group:
@@ -439,18 +443,22 @@ def plot_sweep(rows, tree, key, group, path):
         match = re.search(rf"(?:\[|,){re.escape(key)}=([^,\]]+)", row["variant"])
         value = number(match.group(1)) if match else None
         psnr, flip, memory = number(row.get("psnr")), number(row.get("flip")), number(row.get("memory_total_mb"))
+        speedup = number(row.get(speed_key)) if speed_key else None
         if value is None or psnr is None:
             return False
-        points.append((value, psnr, flip, memory))
+        points.append((value, psnr, flip, memory, speedup))
     if len(points) < 2:
         return False
     points.sort()
     fig, axis = plt.subplots(figsize=(5, 3.4))
     xs = [p[0] for p in points]
     axis.plot(xs, [p[1] for p in points], "o-", color="C0", label="PSNR")
-    for x, psnr, _, memory in points:
-        if memory is not None:
-            axis.annotate(f"{memory:.0f} MB", (x, psnr), textcoords="offset points", xytext=(0, 6),
+    for x, psnr, _, memory, speedup in points:
+        label = " ".join(part for part in (
+            f"{memory:.0f} MB" if memory is not None else "",
+            f"{speedup:.2f}x@{forest_sizes[-1]}" if speedup is not None else "") if part)
+        if label:
+            axis.annotate(label, (x, psnr), textcoords="offset points", xytext=(0, 6),
                           ha="center", fontsize=7)
     axis.set_xlabel(key)
     axis.set_ylabel("PSNR over coverage union (dB)", color="C0")

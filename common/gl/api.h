@@ -102,6 +102,7 @@ namespace canopy::gl {
   X(PFNGLUNIFORM4FPROC, Uniform4f)                                             \
   X(PFNGLUNIFORM3FVPROC, Uniform3fv)                                           \
   X(PFNGLUNIFORM4FVPROC, Uniform4fv)                                           \
+  X(PFNGLUNIFORMMATRIX3FVPROC, UniformMatrix3fv)                               \
   X(PFNGLUNIFORMMATRIX4FVPROC, UniformMatrix4fv)                               \
   X(PFNGLDRAWARRAYSPROC, DrawArrays)                                           \
   X(PFNGLDRAWELEMENTSPROC, DrawElements)                                       \

@@ -417,6 +417,9 @@ void Program::set(const char* uniform, const glm::vec3& v) const {
 void Program::set(const char* uniform, const glm::vec4& v) const {
   api().Uniform4f(location(uniform), v.x, v.y, v.z, v.w);
 }
+void Program::set(const char* uniform, const glm::mat3& m) const {
+  api().UniformMatrix3fv(location(uniform), 1, GL_FALSE, glm::value_ptr(m));
+}
 void Program::set(const char* uniform, const glm::mat4& m) const {
   api().UniformMatrix4fv(location(uniform), 1, GL_FALSE, glm::value_ptr(m));
 }

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include <glm/mat3x3.hpp>
 #include <glm/mat4x4.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
@@ -146,6 +147,7 @@ class Program {
   void set(const char* uniform, const glm::vec2& value) const;
   void set(const char* uniform, const glm::vec3& value) const;
   void set(const char* uniform, const glm::vec4& value) const;
+  void set(const char* uniform, const glm::mat3& value) const;
   void set(const char* uniform, const glm::mat4& value) const;
 
  private:

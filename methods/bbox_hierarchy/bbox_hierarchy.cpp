@@ -33,6 +33,9 @@ struct BboxParams {
   int supersample = 4;
   std::string compression = "dxt5";
   float textureBudgetMb = 2.0f;
+  std::string quadBlend = "facing";
+  float facingPower = 1.0f;
+  float lodBias = 1.0f;
   WoodParams wood;
 
   template <class Visitor>
@@ -58,6 +61,15 @@ struct BboxParams {
       "box images, as stored with their mip levels, within this many MB: the finest boxes "
       "(fewest leaves first) lose theirs, so the memory does not grow with the tree (the root "
       "keeps its images); 0: no bound");
+    v("quad_blend", quadBlend, {"facing", "none"},
+      "a box's seen quads: alpha-blended by how squarely each faces the viewer (§4; "
+      "screen-door, order-independent: a quad keeps w / w_max of its pixels, w = "
+      "|n·v|^facing_power) or all alpha-tested over each other");
+    v("facing_power", facingPower, 0.25f, 16.0f,
+      "quad_blend facing: sharpness of the weights (large: the most squarely facing quad only)");
+    v("lod_bias", lodBias, 0.25f, 16.0f,
+      "output pixels one box texel may span when the box is drawn as images (Fig. 5: 1); "
+      "larger switches to images nearer the viewer: faster, coarser");
     wood.visit(v);
   }
 };
@@ -273,6 +285,12 @@ class BboxHierarchy final : public Method {
     }
     device.generateMipmaps(mLeafTexture);
     gl::setTextureSampling(mLeafTexture, true, false);
+    // Every box's three quad pairs for the facing blend (the boxes' images face these ways).
+    mPairNormals.assign(mHierarchy.nodes.size(), glm::mat3(1.0f));
+    for (size_t n = 0; n < mHierarchy.nodes.size(); ++n) {
+      const auto quads = boxQuads(mHierarchy.nodes[n].box, mParams.arrangement == "diagonal");
+      mPairNormals[n] = glm::mat3(quads[0].normal, quads[2].normal, quads[4].normal);
+    }
     mProgram = device.createProgram({gl::embeddedShader("methods/bbox_hierarchy/box.vert"),
                                      gl::embeddedShader("methods/bbox_hierarchy/box.frag")});
     mDevice = &device;
@@ -282,11 +300,11 @@ class BboxHierarchy final : public Method {
 
   void draw(const FrameContext& frame, std::span<const Instance> instances) override {
     if (instances.empty()) return;
-    // A box switches to its images where one of its texels spans one output pixel: its LoD
-    // distance is its world size per texel times the output focal length (in pixels).
+    // A box switches to its images where one of its texels spans lod_bias output pixels: its LoD
+    // distance is its world size per texel times the output focal length (in pixels) / lod_bias.
     std::vector<float> lodDistance(mHierarchy.nodes.size());
     for (size_t n = 0; n < lodDistance.size(); ++n)
-      lodDistance[n] = mWorldPerTexel[n] * frame.lodFocalPixels;
+      lodDistance[n] = mWorldPerTexel[n] * frame.lodFocalPixels / mParams.lodBias;
     std::vector<std::vector<glm::mat4>> boxLists(mHierarchy.nodes.size()),
         leafLists(mHierarchy.nodes.size());
     for (const Instance& instance : instances)
@@ -328,10 +346,15 @@ class BboxHierarchy final : public Method {
     g.BindVertexArray(mVao.id());
     // Box quads with back-face culling: three of the six are seen (Fig. 3).
     mProgram.set("uLeafMode", 0);
+    mProgram.set("uCameraPosition", frame.cameraPosition);
+    mProgram.set("uFacingBlend", mParams.quadBlend == "facing" ? 1 : 0);
+    mProgram.set("uFacingPower", mParams.facingPower);
     g.Enable(GL_CULL_FACE);
     g.CullFace(GL_BACK);
     for (size_t n = 0; n < boxRanges.size(); ++n) {
       if (boxRanges[n].second == 0) continue;
+      mProgram.set("uPairNormals", mPairNormals[n]);
+      mProgram.set("uBoxCenter", mHierarchy.nodes[n].box.center());
       bindInstanceMatrices(mMatrixBuffer.id(), 4, boxRanges[n].first);
       g.DrawElementsInstanced(GL_TRIANGLES, 36, GL_UNSIGNED_INT,
                               reinterpret_cast<const void*>(sizeof(uint32_t) * mBoxFirstIndex[n]),
@@ -339,6 +362,7 @@ class BboxHierarchy final : public Method {
     }
     g.Disable(GL_CULL_FACE);
     mProgram.set("uLeafMode", 1);
+    mProgram.set("uFacingBlend", 0);
     for (size_t n = 0; n < leafRanges.size(); ++n) {
       const BoxNode& node = mHierarchy.nodes[n];
       if (leafRanges[n].second == 0 || node.leafEnd == node.leafBegin) continue;
@@ -547,6 +571,7 @@ class BboxHierarchy final : public Method {
   std::vector<int32_t> mTextured;
   std::vector<uint32_t> mBoxFirstIndex;
   std::vector<float> mWorldPerTexel;
+  std::vector<glm::mat3> mPairNormals;  // per node: its quad pairs' normals (facing blend)
   uint64_t mSignature = 0;          // of the boxes the last draw showed as images (popping metric)
   uint64_t mLeafPolygonsDrawn = 0;  // leaves the last draw drew as polygons, all instances
   uint32_t mLeafFirstIndex = 0;

@@ -1,9 +1,11 @@
 #version 430 core
 // Alpha-tested texel of a box image (2D atlas) or of a polygonal leaf (front/back array), with
-// an ordered-dither dissolve for blended transitions between levels (order-independent).
+// an ordered-dither dissolve for blended transitions between levels and a second dither that
+// blends a box's quads by facing (both order-independent: screen-door, no sorting).
 in vec3 vNormal;
 in vec2 vUv;
 flat in vec2 vDissolve;
+flat in vec2 vFacingRange;
 
 uniform int uLeafMode;               // 0: box image from uAtlas; 1: leaf from uLeafImages
 uniform sampler2D uAtlas;
@@ -21,10 +23,18 @@ float bayer4(ivec2 p) {
   return (m[(p.y & 3) * 4 + (p.x & 3)] + 0.5) / 16.0;
 }
 
+// A second dither, uncorrelated with bayer4 so a dissolving box still shows each quad its share
+// (interleaved gradient noise: Jimenez 2014).
+float gradientNoise(vec2 p) {
+  return fract(52.9829189 * fract(dot(p, vec2(0.06711056, 0.00583715))));
+}
+
 void main() {
   float d = bayer4(ivec2(gl_FragCoord.xy));
   bool keepBelow = vDissolve.y > 0.5;
   if (keepBelow ? d >= vDissolve.x : d < vDissolve.x) discard;
+  float facing = gradientNoise(floor(gl_FragCoord.xy));
+  if (facing < vFacingRange.x || facing >= vFacingRange.y) discard;
   vec4 texel;
   if (uLeafMode == 0) {
     texel = texture(uAtlas, vUv);

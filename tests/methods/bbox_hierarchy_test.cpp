@@ -2,10 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <map>
 #include <set>
 
 #include <glm/geometric.hpp>
+#include <glm/trigonometric.hpp>
 
 #include "bench/harness.h"
 #include "common/error.h"
@@ -221,6 +223,81 @@ TEST(BboxHierarchy, BoxImageMatchesTheLeavesInsideTheBox) {
   EXPECT_LT(metrics.coverageError, 0.25);
 }
 
+// The facing blend (§4): seen obliquely, a box's less squarely facing quad keeps the share
+// w / w_max of its pixels. Seen 25° off the +Z face, the X quad's weight is tan 25° = 0.47 of the
+// Z quad's, so of the coverage only the X quad adds, the blend keeps about that share; a large
+// facing_power keeps almost none of it, and no blending keeps all of it.
+TEST(BboxHierarchy, FacingBlendFadesTheObliqueQuadByItsWeight) {
+  auto context = test::makeTestContext();
+  gl::Ledger ledger;
+  gl::Device device(ledger);
+  LSystemTreeParams params = treePreset("sparse");
+  params.leaves = 300;
+  params.leafLength = 0.9f;
+  params.leafWidth = 0.5f;
+  params.leafTextureSize = 32;
+  const Tree tree = generateTree(params, 3);
+  RenderSettings settings;
+  settings.width = settings.height = 320;
+  settings.fovYDegrees = 10.0f;
+  Harness harness(device, settings);
+  const float radius = tree.boundingSphereRadius();
+  const float azimuth = glm::radians(25.0f);
+  Camera camera;  // far enough that only the root box is drawn, as its images (256² texels)
+  camera.target = tree.bounds.center();
+  camera.position =
+      camera.target + glm::vec3(std::sin(azimuth), 0.0f, std::cos(azimuth)) * (radius * 20.0f);
+  camera.fovYDegrees = settings.fovYDegrees;
+  camera.nearPlane = radius * 15.0f;
+  camera.farPlane = radius * 25.0f;
+  const auto coverage = [&](const nlohmann::json& blend) {
+    nlohmann::json p = {
+        {"wood", false}, {"texture_size", 256}, {"transition", 0.0}, {"volume_ratio", 1.0}};
+    p.update(blend);
+    const ImageRgba8 image =
+        harness.render(*test::bakeAndUpload(device, tree, "bbox_hierarchy", p), camera);
+    double sum = 0.0;
+    for (size_t i = 3; i < image.pixels.size(); i += 4) sum += image.pixels[i] / 255.0;
+    return sum;
+  };
+  const double all = coverage({{"quad_blend", "none"}});
+  const double blended = coverage({{"quad_blend", "facing"}, {"facing_power", 1.0}});
+  const double frontOnly = coverage({{"quad_blend", "facing"}, {"facing_power", 16.0}});
+  const double kept = (blended - frontOnly) / (all - frontOnly);
+  std::printf("coverage (pixel units): none %.1f, facing %.1f, facing^16 %.1f; kept share %.3f\n",
+              all, blended, frontOnly, kept);
+  ASSERT_GT(all - frontOnly, 300.0) << "the X quad adds coverage of its own at this view";
+  // tan 25° = 0.466, power 16 keeps 0.466^16 ≈ 0 of its pixels; the dither is uniform, so the kept
+  // share is the weight up to sampling and to pixels both quads share after filtering (±0.15).
+  EXPECT_NEAR(kept, std::tan(azimuth), 0.15);
+}
+
+// lod_bias > 1 switches boxes to their images nearer the viewer: fewer leaf polygons.
+TEST(BboxHierarchy, LodBiasDrawsImagesNearer) {
+  auto context = test::makeTestContext();
+  gl::Ledger ledger;
+  gl::Device device(ledger);
+  const Tree tree = test::smallTree(1200, 3);
+  RenderSettings settings;
+  settings.width = settings.height = 128;
+  Harness harness(device, settings);
+  Camera camera;
+  camera.target = tree.bounds.center();
+  camera.position = camera.target + glm::vec3(0, 0, 1) * (tree.boundingSphereRadius() * 2.0f);
+  std::map<float, uint64_t> leafPolygons;
+  for (const float bias : {1.0f, 4.0f}) {
+    auto method = test::bakeAndUpload(
+        device, tree, "bbox_hierarchy",
+        {{"wood", false}, {"lod_bias", bias}, {"min_box_leaves", 4}, {"volume_ratio", 0.0}});
+    harness.render(*method, camera);
+    leafPolygons[bias] = method->leafPolygonsDrawn();
+  }
+  std::printf("leaf polygons drawn: lod_bias 1: %llu, 4: %llu\n",
+              (unsigned long long)leafPolygons[1.0f], (unsigned long long)leafPolygons[4.0f]);
+  EXPECT_GT(leafPolygons[1.0f], 0u);
+  EXPECT_LT(leafPolygons[4.0f], leafPolygons[1.0f]);
+}
+
 // The box images fit texture_budget_mb whatever the tree: a tree with eight times the leaves has
 // more boxes worth images, and under the bound its finest boxes lose theirs, so its texture memory
 // (ledger) stays that of the small tree, while without one it grows with the leaves.
@@ -268,7 +345,10 @@ TEST(BboxHierarchy, BadParametersNameTheParameter) {
                                                            {"hierarchy", "octree"},
                                                            {"transition", -1.0},
                                                            {"compression", "bc7"},
-                                                           {"texture_budget_mb", -1.0}});
+                                                           {"texture_budget_mb", -1.0},
+                                                           {"quad_blend", "sorted"},
+                                                           {"facing_power", 0.0},
+                                                           {"lod_bias", 0.0}});
 }
 
 }  // namespace
