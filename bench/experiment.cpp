@@ -48,6 +48,15 @@ std::string hashJson(const nlohmann::json& json) {
   return fmt::format("fnv1a64:{:016x}", hash);
 }
 
+ForestTiming ForestSettings::timingFor(int trees) const {
+  if (largeFrom <= 0 || trees < largeFrom) return timing;
+  ForestTiming large = timing;
+  large.frames = largeFrames;
+  large.warmup = largeWarmup;
+  large.blocks = 1;
+  return large;
+}
+
 namespace {
 
 std::string variantLabel(const std::string& method, const nlohmann::json& params) {

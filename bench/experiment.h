@@ -62,11 +62,25 @@ struct ViewSettings {
 struct ForestSettings {
   std::vector<int> sizes{1, 10, 100};
   ForestTiming timing;
+  // Forests so large that the reference takes tens of seconds a frame (10,000 polygonal trees on
+  // a software renderer) are timed on a shorter path: every camera is still drawn by the
+  // reference and each method in turn, only fewer cameras (the records say how many).
+  int largeFrom = 0;
+  int largeFrames = 2;
+  int largeWarmup = 1;
+
+  // The timing of a forest of `trees`: `timing`, or its shorter path from large_from on.
+  ForestTiming timingFor(int trees) const;
 
   template <class V>
   void visit(V& v) {
     v("sizes", sizes, 1, 1'000'000, "trees per forest, each timed and scored");
     timing.visit(v);
+    v("large_from", largeFrom, 0, 1'000'000,
+      "forests of at least this many trees are timed on large_frames cameras after "
+      "large_warmup untimed frames, in one block (0: none)");
+    v("large_frames", largeFrames, 1, 100'000, "timed frames of each for large forests");
+    v("large_warmup", largeWarmup, 0, 100'000, "untimed frames of each before, large forests");
   }
 };
 

@@ -15,7 +15,7 @@ namespace {
 
 ForestRecord forestRecord(const RunContext& run, const VariantRun& v, int size,
                           const InterleavedTimes& times, bool compared) {
-  const ForestTiming& timing = run.config.forests.timing;
+  const ForestTiming timing = run.config.forests.timingFor(size);
   const double nan = std::nan("");
   ForestRecord record = v.record<ForestRecord>();
   record.trees = size;
@@ -47,7 +47,6 @@ ForestRecord forestRecord(const RunContext& run, const VariantRun& v, int size,
 }  // namespace
 
 void runForests(RunContext& run, TreeSession& session, std::span<const ForestWork> work) {
-  const ForestTiming& timing = run.config.forests.timing;
   std::vector<int> sizes;  // in the config's order
   for (int size : run.config.forests.sizes) {
     for (const ForestWork& w : work) {
@@ -70,6 +69,7 @@ void runForests(RunContext& run, TreeSession& session, std::span<const ForestWor
       methods.push_back(w.method);
     }
     const std::vector<Instance> forest = session.forest(size);
+    const ForestTiming timing = run.config.forests.timingFor(size);
     std::vector<InterleavedTimes> times;
     if (reference) {
       times = run.harness.timeInterleaved(*reference, methods, forest, session.tree().bounds,

@@ -55,11 +55,11 @@ double unitCost(const ExperimentConfig& config, const TreeSpec& tree,
   // Each view is drawn by the method and scored against the reference's (cached per tree).
   double seconds = viewCount * kViewSeconds * viewPixels * (traits.cost.frameCost + 0.5);
   if (config.budget && traits.memoryKnob) seconds *= 1.0 + config.budget->maxSteps;
-  const ForestTiming& timing = config.forests.timing;
-  const double forestPixels = double(timing.width) * timing.height / (512.0 * 512.0);
-  const double framesPerTree =
-      double(timing.warmup + timing.blocks) + double(timing.frames) * std::max(timing.repeats, 1);
   for (int trees : config.forests.sizes) {
+    const ForestTiming timing = config.forests.timingFor(trees);
+    const double forestPixels = double(timing.width) * timing.height / (512.0 * 512.0);
+    const double framesPerTree =
+        double(timing.warmup + timing.blocks) + double(timing.frames) * std::max(timing.repeats, 1);
     seconds += framesPerTree * trees * kTreeFrameSeconds * std::max(forestPixels, 0.25) *
                (1.0 + traits.cost.frameCost);
   }

@@ -133,6 +133,31 @@ TEST(Config, FairHarnessSettingsAreCheckedAndNamed) {
   EXPECT_FALSE(parseExperimentConfig({{"name", "d"}}, "").views.closeups.enabled);
 }
 
+// Large forests are timed on their own shorter path; smaller ones keep the config's timing.
+TEST(Config, LargeForestsTimeFewerFrames) {
+  const ExperimentConfig config = parseExperimentConfig({{"name", "f"},
+                                                         {"forests",
+                                                          {{"sizes", {100, 10000}},
+                                                           {"frames", 10},
+                                                           {"warmup", 2},
+                                                           {"blocks", 5},
+                                                           {"large_from", 5000},
+                                                           {"large_frames", 3},
+                                                           {"large_warmup", 0}}}},
+                                                        "");
+  const ForestTiming small = config.forests.timingFor(100), large = config.forests.timingFor(10000);
+  EXPECT_EQ(small.frames, 10);
+  EXPECT_EQ(small.warmup, 2);
+  EXPECT_EQ(small.blocks, 5);
+  EXPECT_EQ(large.frames, 3);
+  EXPECT_EQ(large.warmup, 0);
+  EXPECT_EQ(large.blocks, 1);
+  EXPECT_EQ(large.width, small.width);
+  const ExperimentConfig none =
+      parseExperimentConfig({{"name", "g"}, {"forests", {{"sizes", {10000}}}}}, "");
+  EXPECT_EQ(none.forests.timingFor(10000).frames, none.forests.timing.frames) << "large_from 0";
+}
+
 TEST(Config, ListsInParamsAreSweeps) {
   const auto points = expandSweep({{"a", {1, 2}}, {"b", {"x", "y", "z"}}, {"c", 5}});
   ASSERT_EQ(points.size(), 6u);
