@@ -175,29 +175,41 @@ TEST(BoxHierarchy, TheWalkDrawsEveryLeafExactlyOnceAtAnyDistance) {
   }
 }
 
-// A box image seen along its face direction matches the polygonal leaves inside the box.
-TEST(BboxHierarchy, BoxImageMatchesTheLeavesInsideTheBox) {
-  auto context = test::makeTestContext();
-  gl::Ledger ledger;
-  gl::Device device(ledger);
-  // Large leaves, so they cover several pixels where the root box is drawn as images.
+// A sparse tree of large leaves, so they cover several pixels where the root box is drawn as
+// its images.
+Tree largeLeafTree() {
   LSystemTreeParams params = treePreset("sparse");
   params.leaves = 300;
   params.leafLength = 0.9f;
   params.leafWidth = 0.5f;
   params.leafTextureSize = 64;
-  const Tree tree = generateTree(params, 3);
+  return generateTree(params, 3);
+}
+
+// A narrow camera looking at the tree's centre from `direction`, far enough (20 radii) that the
+// root box is drawn as its images.
+Camera farCamera(const Tree& tree, const glm::vec3& direction, float fovYDegrees) {
+  const float radius = tree.boundingSphereRadius();
+  Camera camera;
+  camera.target = tree.bounds.center();
+  camera.position = camera.target + glm::normalize(direction) * (radius * 20.0f);
+  camera.fovYDegrees = fovYDegrees;
+  camera.nearPlane = radius * 15.0f;
+  camera.farPlane = radius * 25.0f;
+  return camera;
+}
+
+// A box image seen along its face direction matches the polygonal leaves inside the box.
+TEST(BboxHierarchy, BoxImageMatchesTheLeavesInsideTheBox) {
+  auto context = test::makeTestContext();
+  gl::Ledger ledger;
+  gl::Device device(ledger);
+  const Tree tree = largeLeafTree();
   RenderSettings settings;
   settings.width = settings.height = 96;
   settings.fovYDegrees = 10.0f;
   Harness harness(device, settings);
-  const float radius = tree.boundingSphereRadius();
-  Camera camera;  // along +Z, far enough that the root box is drawn as its images
-  camera.target = tree.bounds.center();
-  camera.position = camera.target + glm::vec3(0, 0, 1) * (radius * 20.0f);
-  camera.fovYDegrees = settings.fovYDegrees;
-  camera.nearPlane = radius * 15.0f;
-  camera.farPlane = radius * 25.0f;
+  const Camera camera = farCamera(tree, {0, 0, 1}, settings.fovYDegrees);  // along +Z
   const auto render = [&](const std::string& name, const nlohmann::json& params) {
     return harness.render(*test::bakeAndUpload(device, tree, name, params), camera);
   };
@@ -231,25 +243,14 @@ TEST(BboxHierarchy, FacingBlendFadesTheObliqueQuadByItsWeight) {
   auto context = test::makeTestContext();
   gl::Ledger ledger;
   gl::Device device(ledger);
-  LSystemTreeParams params = treePreset("sparse");
-  params.leaves = 300;
-  params.leafLength = 0.9f;
-  params.leafWidth = 0.5f;
-  params.leafTextureSize = 32;
-  const Tree tree = generateTree(params, 3);
+  const Tree tree = largeLeafTree();
   RenderSettings settings;
-  settings.width = settings.height = 320;
+  settings.width = settings.height = 320;  // the root's 256² texels still one per pixel or less
   settings.fovYDegrees = 10.0f;
   Harness harness(device, settings);
-  const float radius = tree.boundingSphereRadius();
   const float azimuth = glm::radians(25.0f);
-  Camera camera;  // far enough that only the root box is drawn, as its images (256² texels)
-  camera.target = tree.bounds.center();
-  camera.position =
-      camera.target + glm::vec3(std::sin(azimuth), 0.0f, std::cos(azimuth)) * (radius * 20.0f);
-  camera.fovYDegrees = settings.fovYDegrees;
-  camera.nearPlane = radius * 15.0f;
-  camera.farPlane = radius * 25.0f;
+  const Camera camera =
+      farCamera(tree, {std::sin(azimuth), 0.0f, std::cos(azimuth)}, settings.fovYDegrees);
   const auto coverage = [&](const nlohmann::json& blend) {
     nlohmann::json p = {
         {"wood", false}, {"texture_size", 256}, {"transition", 0.0}, {"volume_ratio", 1.0}};
