@@ -41,7 +41,7 @@ struct BboxParams {
   template <class Visitor>
   void visit(Visitor& v) {
     v("texture_size", textureSize, 8, 1024,
-      "texels per side of every box image, all levels (§3.2.3: 64 or 128; the memory knob)");
+      "texels per side of every box image, all levels (§3.2.3: 64 or 128)");
     v("volume_ratio", volumeRatio, 0.0f, 1.0f,
       "no images for a box below this fraction of its parent's volume (§3.2.4)");
     v("arrangement", arrangement, {"cross", "diagonal"},
@@ -60,7 +60,7 @@ struct BboxParams {
     v("texture_budget_mb", textureBudgetMb, 0.0f, 100000.0f,
       "box images, as stored with their mip levels, within this many MB: the finest boxes "
       "(fewest leaves first) lose theirs, so the memory does not grow with the tree (the root "
-      "keeps its images); 0: no bound");
+      "keeps its images; the memory knob); 0: no bound");
     v("quad_blend", quadBlend, {"facing", "none"},
       "a box's seen quads: alpha-blended by how squarely each faces the viewer (§4; "
       "screen-door, order-independent: a quad keeps w / w_max of its pixels, w = "
@@ -596,7 +596,7 @@ void registerBboxHierarchy(MethodRegistry& registry) {
   addMethod<BboxHierarchy, BboxParams>(
       registry, "bbox_hierarchy",
       "bounding-box hierarchy of six images per box (Lluch et al. 2004)",
-      {.memoryKnob = MemoryKnob{"texture_size", 8, 512, true, true},
+      {.memoryKnob = MemoryKnob{"texture_budget_mb", 0.05, 64.0, false, true},
        .cost = {.bakeSeconds = 1.8, .frameCost = 0.9}});
 }
 
