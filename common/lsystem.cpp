@@ -288,6 +288,7 @@ Tree interpretTreeString(const std::vector<Module>& modules, const LSystemTreePa
   Random random(seed, 0x3c6ef372fe94f82bULL);
   Tree tree;
   tree.name = params.preset;
+  tree.wood.solid = true;  // addCylinder winds every tube's quads counter-clockwise from outside
   tree.woodMaterials.push_back({"bark", glm::vec4(0.36f, 0.26f, 0.18f, 1.0f), -1});
   tree.branches.push_back(BranchNode{});  // the root box: the trunk
   std::vector<Turtle> stack;

@@ -36,6 +36,12 @@ struct WoodMesh {
   std::vector<glm::vec2> uvs;         // one per position
   std::vector<uint32_t> indices;      // three per triangle
   std::vector<uint16_t> materialIds;  // one per triangle, into Tree::woodMaterials
+  // The wood stands for opaque branches whose triangles are wound counter-clockwise seen from
+  // outside, so every drawing (the reference's too) culls back faces: they show only through a
+  // tube's open end, where a real branch is solid. Set by a source that builds the wood that way
+  // (the L-system); a loaded file makes no such promise (its normals may be derived from the
+  // winding, so they cannot vouch for it) and is drawn double-sided.
+  bool solid = false;
 
   size_t triangleCount() const { return indices.size() / 3; }
 };

@@ -65,6 +65,7 @@ void WoodRenderer::bake(const Tree& tree, bool levels) {
     ranges.back().count += 3;
   }
   mBounds = tree.bounds;
+  mSolid = wood.solid;
   // Error bounds from a thousandth of the tree's radius (sub-pixel at the closest views) to a
   // quarter of it (trees a few pixels tall).
   const float radius = 0.5f * glm::length(mBounds.extent());
@@ -123,6 +124,13 @@ void WoodRenderer::draw(const FrameContext& frame, std::span<const Instance> ins
   mProgram.set("uWoodTexture", 0);
   g.ActiveTexture(GL_TEXTURE0);
   g.BindVertexArray(mVao.id());
+  // Solid wood: back faces are hidden behind front faces, so culling them changes no pixel the
+  // reference would not change alike, and spares their rasterization (a quarter of the classic
+  // cloud's frame at 1000 trees on llvmpipe).
+  if (mSolid) {
+    g.Enable(GL_CULL_FACE);
+    g.CullFace(GL_BACK);
+  }
   const std::vector<float> thresholds =
       mLevels.thresholds(0.5f * glm::length(mBounds.extent()), errorPixels);
   if (thresholds.empty()) {
@@ -138,6 +146,7 @@ void WoodRenderer::draw(const FrameContext& frame, std::span<const Instance> ins
     }
   }
   g.BindVertexArray(0);
+  g.Disable(GL_CULL_FACE);  // the harness's state for every other draw
 }
 
 std::vector<uint64_t> WoodRenderer::instancesPerLevel() const {
@@ -156,6 +165,7 @@ nlohmann::json WoodRenderer::describeLevels() const {
 
 nlohmann::json WoodRenderer::withLevels(nlohmann::json report) const {
   report["wood_levels"] = describeLevels();
+  report["wood_back_faces_culled"] = mSolid;
   return report;
 }
 
@@ -191,9 +201,11 @@ struct WoodFields {
     size_t textures = 0;
     std::vector<WoodLevelFields> levels;
     std::array<float, 3> boundsMin{}, boundsMax{};
+    bool solid = false;
     template <class V>
     void visit(V& v) {
       v("materials", materials);
+      v("solid", solid);
       v("textures", textures);
       v("levels", levels);
       v("bounds_min", boundsMin);
@@ -223,6 +235,7 @@ void WoodRenderer::save(AssetFolder& asset) const {
         {m.name, {m.baseColor.r, m.baseColor.g, m.baseColor.b, m.baseColor.a}, m.texture});
   }
   fields.wood.textures = mTextures.size();
+  fields.wood.solid = mSolid;
   asset.writeImages("wood_{}.png", mTextures);
   asset.writeFields(fields);
 }
@@ -242,6 +255,7 @@ void WoodRenderer::load(AssetFolder& asset) {
   const auto& lo = fields.wood.boundsMin;
   const auto& hi = fields.wood.boundsMax;
   mBounds = {glm::vec3(lo[0], lo[1], lo[2]), glm::vec3(hi[0], hi[1], hi[2])};
+  mSolid = fields.wood.solid;
   if (mLevels.levels() == 0 || !mLevels.consistent() || mBounds.empty())
     throwInputError("{}: corrupt wood levels", folder);
   mMaterials.clear();

@@ -60,7 +60,8 @@ class WoodRenderer {
   size_t triangleCount() const { return mLevels.levels() == 0 ? 0 : mLevels.triangles(0); }
   // The levels for bake reports: triangles and error bound (world units) of each.
   nlohmann::json describeLevels() const;
-  // `report` with "wood_levels" (describeLevels) added: every impostor's bake report has it.
+  // `report` with "wood_levels" (describeLevels) and "wood_back_faces_culled" (WoodMesh::solid)
+  // added: every method's bake report has them.
   nlohmann::json withLevels(nlohmann::json report) const;
   // Like Method::lodSignature / instancesPerLevel for the last draw's wood (empty without levels).
   uint64_t lodSignature() const { return mLodUsed ? mLod.signature() : 0; }
@@ -72,7 +73,8 @@ class WoodRenderer {
 
   std::vector<MeshVertex> mVertices;
   WoodLevels mLevels;
-  Aabb mBounds;  // the tree's: the LoD radius, as the leaves' LoD measures it
+  Aabb mBounds;         // the tree's: the LoD radius, as the leaves' LoD measures it
+  bool mSolid = false;  // WoodMesh::solid: back faces culled
   std::vector<WoodMaterial> mMaterials;
   std::vector<ImageRgba8> mTextures;
   gl::Buffer mVbo, mIbo;

@@ -36,6 +36,9 @@ struct MultilayerParams {
   bool ambientOcclusion = true;
   int aoRays = 32;
   std::string compression = "dxt5";
+  // Uncompressed: the leaf images are a few tens of kB, and on llvmpipe decoding BC3 inside the
+  // list walk took 30 % of a one-tree frame (docs/METHODS.md, "multi-layer speed").
+  std::string leafImageCompression = "none";
   std::string listsPrecision = "8bit";
   bool parallax = false;
   float parallaxMaxAngle = 70.0f;
@@ -62,7 +65,9 @@ struct MultilayerParams {
       "Embree AO of the polygonal tree at the leaf corners, for lit frames (§5.2)");
     v("ao_rays", aoRays, 1, 4096, "rays per leaf corner for the ambient occlusion");
     v("compression", compression, {"none", "dxt1", "dxt5"},
-      "colour textures: uncompressed, BC1 or BC3 (S3TC)");
+      "low-resolution atlas: uncompressed, BC1 or BC3 (S3TC)");
+    v("leaf_image_compression", leafImageCompression, {"none", "dxt1", "dxt5"},
+      "leaf images (sampled at every step of the list walk): uncompressed, BC1 or BC3");
     v("lists_precision", listsPrecision, {"float16", "8bit"},
       "leaf records: RGBA16F, or RGBA8 (16-bit positions, 8-bit frames) with 4-bit AO");
     v("parallax", parallax,
@@ -251,10 +256,10 @@ class MultilayerIndirect final : public Method {
     }
     for (const gl::Texture* texture : {&mHashTexture, &mListsTexture})
       gl::setTextureSampling(*texture, false, false);
-    const Compression compression = parseCompression(mParams.compression);
-    mLeavesTexture = uploadAlphaTestedArray(device, mLeafLayers, true, "leaf images", compression);
-    mLowResTexture =
-        uploadAlphaTestedArray(device, mLowRes, true, "low-resolution atlas", compression);
+    mLeavesTexture = uploadAlphaTestedArray(device, mLeafLayers, true, "leaf images",
+                                            parseCompression(mParams.leafImageCompression));
+    mLowResTexture = uploadAlphaTestedArray(device, mLowRes, true, "low-resolution atlas",
+                                            parseCompression(mParams.compression));
     if (!mLowResOcclusion.empty()) {
       std::vector<uint8_t> red(size_t(mLowResOcclusion.width) * mLowResOcclusion.height);
       for (size_t i = 0; i < red.size(); ++i) red[i] = mLowResOcclusion.pixels[i * 4];
@@ -504,7 +509,8 @@ class MultilayerIndirect final : public Method {
     program.set("uHasLowResOcclusion", mLowResOcclusionTexture.id() ? 1 : 0);
     program.set("uLodFactor", mParams.lodFactor);
     program.set("uLowResRestOnly", mParams.lowResFallback == "rest" ? 1 : 0);
-    program.set("uBinaryAlpha", mParams.compression == "dxt1" ? 1 : 0);
+    program.set("uLowResBinaryAlpha", mParams.compression == "dxt1" ? 1 : 0);
+    program.set("uLeavesBinaryAlpha", mParams.leafImageCompression == "dxt1" ? 1 : 0);
     program.set("uAxisScale", mLists.axisScale);
     program.set("uHeightScale", mLists.heightScale);
     program.set("uMaxSlope", std::tan(mParams.parallaxMaxAngle * kPi / 180.0f));

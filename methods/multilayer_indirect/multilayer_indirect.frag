@@ -39,7 +39,9 @@ uniform mat4 uViewProjection;
 uniform float uAxisScale;    // 8-bit records: range of the frame components
 uniform float uHeightScale;  // 8-bit records: range of the heights
 uniform float uMaxSlope;     // parallax: steeper rays are bent to this in-plane slope
-uniform int uBinaryAlpha;    // BC1 images: divide the filtered colour by the filtered alpha
+// BC1 images: divide the filtered colour by the filtered alpha (transparent texels are black).
+uniform int uLeavesBinaryAlpha;
+uniform int uLowResBinaryAlpha;
 #include "methods/common/lighting.glsl"
 #ifndef CANOPY_LIT
 in vec3 vWorldPosition;  // lighting.glsl declares it for lit frames
@@ -156,7 +158,7 @@ void main() {
     vec4 texel = textureGrad(uLeaves, vec3(uv, 2.0 * record.image + (front ? 0.0 : 1.0)),
                              0.5 * (inverse * planeDx), 0.5 * (inverse * planeDy));
     if (texel.a < 0.5) continue;
-    if (uBinaryAlpha != 0) texel.rgb /= texel.a;  // BC1's transparent texels are black
+    if (uLeavesBinaryAlpha != 0) texel.rgb /= texel.a;
 #if PARALLAX
     float z = record.height + st.x * record.axisU.z + st.y * record.axisV.z;
     vec4 clip = uViewProjection *
@@ -182,7 +184,7 @@ void main() {
     if (uLowResRestOnly != 0)
       coverage = 1.0 - pow(max(1.0 - texel.a, 0.0), float(listLength - budget) / float(listLength));
     if (coverage >= 0.5) {
-      if (uBinaryAlpha != 0) texel.rgb /= texel.a;
+      if (uLowResBinaryAlpha != 0) texel.rgb /= texel.a;
 #if PARALLAX
       gl_FragDepth = gl_FragCoord.z;
 #endif

@@ -4,6 +4,8 @@
 
 #include <cstring>
 
+#include <glm/geometric.hpp>
+
 #include "common/error.h"
 #include "test_support.h"
 
@@ -52,6 +54,26 @@ TEST(LSystem, PresetsHaveTheirLeafCounts) {
   LSystemTreeParams scaled = treePreset("sparse");
   scaled.leaves = 12345;
   EXPECT_EQ(generateTree(scaled, 1).leaves.size(), 12345u);
+}
+
+// WoodMesh::solid lets every drawing cull the wood's back faces; that is only right if each
+// triangle is wound counter-clockwise seen from outside, i.e. along its outward vertex normals.
+TEST(LSystem, WoodIsSolidAndWoundOutward) {
+  for (const std::string& preset : treePresetNames()) {
+    const Tree tree = generateTree(treePreset(preset), 2);
+    EXPECT_TRUE(tree.wood.solid) << preset;
+    const WoodMesh& wood = tree.wood;
+    size_t inward = 0;
+    for (size_t t = 0; t < wood.triangleCount(); ++t) {
+      const uint32_t* corner = &wood.indices[3 * t];
+      const glm::vec3 winding = glm::cross(wood.positions[corner[1]] - wood.positions[corner[0]],
+                                           wood.positions[corner[2]] - wood.positions[corner[0]]);
+      const glm::vec3 outward =
+          wood.normals[corner[0]] + wood.normals[corner[1]] + wood.normals[corner[2]];
+      if (glm::dot(winding, outward) <= 0.0f) ++inward;
+    }
+    EXPECT_EQ(inward, 0u) << preset << ": of " << wood.triangleCount() << " triangles";
+  }
 }
 
 TEST(LSystem, UnknownPresetIsAnInputError) {

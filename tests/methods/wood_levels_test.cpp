@@ -168,6 +168,7 @@ TEST(WoodLevels, MaterialsStaySeparateAndNoBoundMeansOneLevel) {
 }  // namespace canopy
 
 #include "bench/harness.h"
+#include "common/metrics.h"
 #include "methods/method.h"
 #include "test_support.h"
 
@@ -211,6 +212,39 @@ TEST(WoodLevelsDrawn, FarTreesDrawCoarseWoodAndNearViewsTheFullMesh) {
   const auto [fineNear, fineNearImage] = draw(*fine, 1.2f);
   EXPECT_EQ(fineNear.woodInstancesPerLevel.at(0), 1u);
   EXPECT_EQ(fineNearImage.pixels, fullNearImage.pixels);
+  EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
+}
+
+// Solid wood (WoodMesh::solid) is drawn with back faces culled, by the reference as by every
+// impostor, and says so in the bake report: fewer fragments are shaded, and the image changes
+// only where a tube's open end showed its inside.
+TEST(WoodLevelsDrawn, SolidWoodCullsBackFacesInEveryMethod) {
+  auto context = test::makeTestContext();
+  gl::Ledger ledger;
+  gl::Device device(ledger);
+  const Tree solid = test::smallTree(400, 3);
+  ASSERT_TRUE(solid.wood.solid);
+  Tree doubleSided = solid;
+  doubleSided.wood.solid = false;
+  RenderSettings settings;
+  settings.width = settings.height = 128;
+  Harness harness(device, settings);
+  harness.setTree(solid.bounds, solid.leaves.size());
+  const Camera camera = orbitCamera(solid.bounds, {1.5f, 10.0f, 0.0f}, 40.0f);
+  for (const std::string name : {"polygonal", "billboard_cloud"}) {
+    const auto render = [&](const Tree& tree, bool culled) {
+      auto method = test::bakeAndUpload(device, tree, name, nlohmann::json::object(),
+                                        Shading::kUnlit, name + (culled ? " culled" : ""));
+      EXPECT_EQ(method->bakeReport().at("wood_back_faces_culled").get<bool>(), culled) << name;
+      DrawnStats drawn;
+      const ImageRgbaF image = harness.renderLinearAt(*method, camera, 128, 128, &drawn);
+      return std::make_pair(compositeToSrgb8(image, glm::vec3(0.5f)), drawn.counts.fragments);
+    };
+    const auto [culledImage, culledFragments] = render(solid, true);
+    const auto [doubleSidedImage, doubleSidedFragments] = render(doubleSided, false);
+    EXPECT_LT(culledFragments, doubleSidedFragments) << name;
+    EXPECT_GT(compareImages(doubleSidedImage, culledImage).psnr, 35.0) << name;
+  }
   EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
 }
 
