@@ -25,8 +25,8 @@ namespace {
 // docs/METHODS.md show.
 struct MultilayerParams {
   // K = 1000: broadleaf 20.7 dB at 1.5 radii, coverage error 0.076, against 19.2 dB / 0.099 for
-  // K = 400; 60 cells rather than 40: +0.7 dB at 12 radii and a shorter walk, 3.37 MB instead
-  // of 2.94 (docs/METHODS.md, "multi-layer defaults").
+  // K = 400; 60 cells rather than 40: +0.9 dB at 12 radii and a shorter walk, 3.31 MB instead
+  // of 2.87 (docs/METHODS.md, "multi-layer defaults").
   CloudParams cloud{.clustering = {.clusters = 1000}};
   int hashResolution = 60;
   int maxLayers = 64;
@@ -37,9 +37,10 @@ struct MultilayerParams {
   bool ambientOcclusion = true;
   int aoRays = 32;
   std::string compression = "dxt5";
-  // Uncompressed: the leaf images are a few tens of kB, and on llvmpipe decoding BC3 inside the
-  // list walk took 30 % of a one-tree frame (docs/METHODS.md, "multi-layer speed").
-  std::string leafImageCompression = "none";
+  // BC3 as the paper: uncompressed is faster on llvmpipe (BC3 decode inside the list walk is 30 %
+  // of a one-tree frame) but scores 0.3-1.5 dB lower at 4 radii (docs/METHODS.md, "multi-layer
+  // speed").
+  std::string leafImageCompression = "dxt5";
   std::string listsPrecision = "8bit";
   bool parallax = false;
   float parallaxMaxAngle = 70.0f;
