@@ -4,7 +4,10 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <utility>
+
+#include <glm/geometric.hpp>
 
 #include "common/config.h"
 #include "methods/common/billboard_cloud.h"
@@ -14,6 +17,7 @@
 #include "methods/common/lod_instances.h"
 #include "methods/common/mesh.h"
 #include "methods/common/mipmaps.h"
+#include "methods/common/wood_capture.h"
 
 namespace canopy {
 namespace {
@@ -29,6 +33,7 @@ struct BillboardCloudParams {
   WoodParams wood;
   std::string compression = "none";
   bool backCapture = true;
+  float woodCapturePixels = 0.0f;
 
   template <class Visitor>
   void visit(Visitor& v) {
@@ -44,6 +49,11 @@ struct BillboardCloudParams {
     v("back_capture", backCapture,
       "a second atlas layer captured from each billboard's back side (false: seen from behind, "
       "a billboard shows its front capture mirrored, as the classic method does)");
+    v("wood_capture_px", woodCapturePixels, 0.0f, 100.0f,
+      "the middle and far clouds' images also hold the wood lying (every corner) within this "
+      "many output pixels of one of their billboards, measured at the largest projected size "
+      "each cloud is drawn at; trees drawn with them draw only the rest of the wood as geometry "
+      "(0: images of leaves only; needs lod)");
   }
 };
 
@@ -59,7 +69,6 @@ class BillboardCloudMethod final : public Method {
   void bake(const Tree& tree, BakeContext& ctx) override {
     mLevels = {};
     mLevels.treeBounds = tree.bounds;
-    mWood.bake(tree, mParams.wood.levels());
     const std::vector<BillboardCloud> clouds =
         buildBillboardCloudFamily(tree, mParams.cloud.levels(), ctx.seed);
     mReport = {{"clouds", describeClouds(clouds)}};
@@ -77,6 +86,8 @@ class BillboardCloudMethod final : public Method {
         sizes.emplace_back(texels(billboard.halfExtents.x), texels(billboard.halfExtents.y));
       }
     }
+    const WoodInImages woodInImages = captureWood(tree, clouds);
+    mWood.bake(tree, mParams.wood.levels(), woodInImages.captured, mParams.cloud.lodNearPixels);
     const AtlasLayout preview = packAtlas(sizes, kAtlasPadding, kAtlasAlignment);
     if (preview.width > kMaxAtlas || preview.height > kMaxAtlas) {
       throwInputError(
@@ -84,13 +95,14 @@ class BillboardCloudMethod final : public Method {
           mParams.density, preview.width, preview.height, kMaxAtlas);
     }
     const LeafImageSampler sampler(tree);
+    const WoodColorSampler woodColors(tree);
     const int sides = mParams.backCapture ? 2 : 1;
     std::vector<ImageRgba8> images(billboards.size() * sides);
     tbb::parallel_for(size_t(0), images.size(), [&](size_t k) {
       const size_t i = k % billboards.size();
-      images[k] = captureLeavesOrthographic(tree, sampler, billboards[i]->leaves, *billboards[i],
-                                            sizes[i].x, sizes[i].y, mParams.supersample,
-                                            k >= billboards.size());
+      images[k] = captureLeavesOrthographic(
+          tree, sampler, billboards[i]->leaves, *billboards[i], sizes[i].x, sizes[i].y,
+          mParams.supersample, k >= billboards.size(), &woodColors, woodInImages.perBillboard[i]);
     });
     // Both sides share one layout: the back capture is the atlas' second layer.
     const std::vector<ImageRgba8> fronts(images.begin(), images.begin() + long(billboards.size()));
@@ -185,6 +197,53 @@ class BillboardCloudMethod final : public Method {
   }
 
  private:
+  // The wood the middle and far clouds' images hold (wood_capture_px).
+  struct WoodInImages {
+    std::vector<bool> captured;                       // per wood triangle; empty: none
+    std::vector<std::vector<uint32_t>> perBillboard;  // over every cloud's billboards in order
+  };
+
+  // A triangle is captured when every image cloud (the middle and far ones) can hold it within
+  // its flattening bound, so the images hold exactly the wood those trees do not draw. Records
+  // the bounds and the count in the report.
+  WoodInImages captureWood(const Tree& tree, const std::vector<BillboardCloud>& clouds) {
+    WoodInImages result;
+    size_t total = 0;
+    for (const BillboardCloud& cloud : clouds) total += cloud.billboards.size();
+    result.perBillboard.resize(total);
+    mReport["wood_captured"] = {{"triangles", 0}};
+    if (!mParams.wood.draw || mParams.woodCapturePixels <= 0.0f || clouds.size() < 3) return result;
+    const float radius = 0.5f * glm::length(tree.bounds.extent());
+    // The largest projected radius each image cloud is drawn at.
+    const std::vector<float> largest = {mParams.cloud.lodNearPixels, mParams.cloud.lodFarPixels};
+    std::vector<std::vector<std::vector<uint32_t>>> assigned;
+    nlohmann::json bounds = nlohmann::json::array();
+    result.captured.assign(tree.wood.triangleCount(), true);
+    for (size_t c = 1; c < clouds.size(); ++c) {
+      const float maxDistance = mParams.woodCapturePixels * radius / largest[c - 1];
+      bounds.push_back(maxDistance);
+      assigned.push_back(assignWoodToBillboards(tree.wood, clouds[c].billboards, maxDistance));
+      std::vector<bool> inCloud(tree.wood.triangleCount(), false);
+      for (const auto& triangles : assigned.back())
+        for (uint32_t t : triangles) inCloud[t] = true;
+      for (size_t t = 0; t < inCloud.size(); ++t)
+        result.captured[t] = result.captured[t] && inCloud[t];
+    }
+    size_t first = clouds[0].billboards.size();
+    for (const auto& cloud : assigned) {
+      for (const auto& triangles : cloud) {
+        for (uint32_t t : triangles)
+          if (result.captured[t]) result.perBillboard[first].push_back(t);
+        ++first;
+      }
+    }
+    const auto count = size_t(std::count(result.captured.begin(), result.captured.end(), true));
+    mReport["wood_captured"] = {{"triangles", count},
+                                {"max_plane_distance", bounds},
+                                {"below_px", mParams.cloud.lodNearPixels}};
+    return result;
+  }
+
   static constexpr int kMaxAtlas = 16384;
   BillboardCloudParams mParams;
   nlohmann::json mReport;

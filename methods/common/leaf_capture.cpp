@@ -9,59 +9,46 @@
 
 namespace canopy {
 
-LeafImageSampler::LeafImageSampler(const Tree& tree) {
-  for (const LeafTexture& texture : tree.leafTextures) {
-    for (const ImageRgba8* image : {&texture.front, &texture.back}) {
-      std::vector<Level> pyramid(1);
-      pyramid[0].width = image->width;
-      pyramid[0].height = image->height;
-      pyramid[0].texels.resize(size_t(image->width) * image->height);
-      for (size_t i = 0; i < pyramid[0].texels.size(); ++i) {
-        const uint8_t* p = &image->pixels[i * 4];
-        pyramid[0].texels[i] = {srgbToLinear(p[0] / 255.0f), srgbToLinear(p[1] / 255.0f),
-                                srgbToLinear(p[2] / 255.0f), p[3] / 255.0f};
-      }
-      // Box-filtered levels; colour weighted by alpha so transparent texels do not darken edges.
-      while (pyramid.back().width > 1 || pyramid.back().height > 1) {
-        const Level& fine = pyramid.back();
-        Level coarse;
-        coarse.width = std::max(1, fine.width / 2);
-        coarse.height = std::max(1, fine.height / 2);
-        coarse.texels.resize(size_t(coarse.width) * coarse.height);
-        for (int y = 0; y < coarse.height; ++y) {
-          for (int x = 0; x < coarse.width; ++x) {
-            glm::vec4 sum(0.0f);
-            for (int dy = 0; dy < 2; ++dy) {
-              for (int dx = 0; dx < 2; ++dx) {
-                const int fx = std::min(fine.width - 1, x * 2 + dx),
-                          fy = std::min(fine.height - 1, y * 2 + dy);
-                const glm::vec4 t = fine.texels[size_t(fy) * fine.width + fx];
-                sum += glm::vec4(glm::vec3(t) * t.a, t.a);
-              }
-            }
-            coarse.texels[size_t(y) * coarse.width + x] =
-                sum.a > 0.0f ? glm::vec4(glm::vec3(sum) / sum.a, sum.a * 0.25f) : glm::vec4(0.0f);
+LinearMipPyramid::LinearMipPyramid(const ImageRgba8& image) {
+  mLevels.resize(1);
+  mLevels[0].width = image.width;
+  mLevels[0].height = image.height;
+  mLevels[0].texels.resize(size_t(image.width) * image.height);
+  for (size_t i = 0; i < mLevels[0].texels.size(); ++i) {
+    const uint8_t* p = &image.pixels[i * 4];
+    mLevels[0].texels[i] = {srgbToLinear(p[0] / 255.0f), srgbToLinear(p[1] / 255.0f),
+                            srgbToLinear(p[2] / 255.0f), p[3] / 255.0f};
+  }
+  while (mLevels.back().width > 1 || mLevels.back().height > 1) {
+    const Level& fine = mLevels.back();
+    Level coarse;
+    coarse.width = std::max(1, fine.width / 2);
+    coarse.height = std::max(1, fine.height / 2);
+    coarse.texels.resize(size_t(coarse.width) * coarse.height);
+    for (int y = 0; y < coarse.height; ++y) {
+      for (int x = 0; x < coarse.width; ++x) {
+        glm::vec4 sum(0.0f);
+        for (int dy = 0; dy < 2; ++dy) {
+          for (int dx = 0; dx < 2; ++dx) {
+            const int fx = std::min(fine.width - 1, x * 2 + dx),
+                      fy = std::min(fine.height - 1, y * 2 + dy);
+            const glm::vec4 t = fine.texels[size_t(fy) * fine.width + fx];
+            sum += glm::vec4(glm::vec3(t) * t.a, t.a);
           }
         }
-        pyramid.push_back(std::move(coarse));
+        coarse.texels[size_t(y) * coarse.width + x] =
+            sum.a > 0.0f ? glm::vec4(glm::vec3(sum) / sum.a, sum.a * 0.25f) : glm::vec4(0.0f);
       }
-      mPyramids.push_back(std::move(pyramid));
     }
+    mLevels.push_back(std::move(coarse));
   }
 }
 
-glm::ivec2 LeafImageSampler::size(uint32_t texture) const {
-  const Level& level = mPyramids[texture * 2][0];
-  return {level.width, level.height};
-}
-
-glm::vec4 LeafImageSampler::sample(uint32_t texture, bool back, glm::vec2 uv,
-                                   float footprint) const {
-  const auto& pyramid = mPyramids[texture * 2 + (back ? 1 : 0)];
+glm::vec4 LinearMipPyramid::sample(glm::vec2 uv, float footprint) const {
   const int level =
       std::clamp(static_cast<int>(std::floor(std::log2(std::max(footprint, 1.0f)) + 0.5f)), 0,
-                 static_cast<int>(pyramid.size()) - 1);
-  const Level& l = pyramid[level];
+                 static_cast<int>(mLevels.size()) - 1);
+  const Level& l = mLevels[level];
   const float x = uv.x * l.width - 0.5f, y = uv.y * l.height - 0.5f;
   const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
   const float fx = x - x0, fy = y - y0;
@@ -72,6 +59,55 @@ glm::vec4 LeafImageSampler::sample(uint32_t texture, bool back, glm::vec2 uv,
   };
   return glm::mix(glm::mix(at(x0, y0), at(x0 + 1, y0), fx),
                   glm::mix(at(x0, y0 + 1), at(x0 + 1, y0 + 1), fx), fy);
+}
+
+LeafImageSampler::LeafImageSampler(const Tree& tree) {
+  for (const LeafTexture& texture : tree.leafTextures) {
+    mPyramids.emplace_back(texture.front);
+    mPyramids.emplace_back(texture.back);
+  }
+}
+
+glm::ivec2 LeafImageSampler::size(uint32_t texture) const {
+  return mPyramids[texture * 2].size();
+}
+
+glm::vec4 LeafImageSampler::sample(uint32_t texture, bool back, glm::vec2 uv,
+                                   float footprint) const {
+  return mPyramids[texture * 2 + (back ? 1 : 0)].sample(uv, footprint);
+}
+
+WoodColorSampler::WoodColorSampler(const Tree& tree) : mWood(tree.wood) {
+  for (const ImageRgba8& image : tree.woodTextures) mPyramids.emplace_back(image);
+  for (const WoodMaterial& material : tree.woodMaterials) {
+    mBaseColors.emplace_back(srgbToLinear(material.baseColor.r), srgbToLinear(material.baseColor.g),
+                             srgbToLinear(material.baseColor.b));
+    mTextures.push_back(material.texture);
+  }
+}
+
+glm::vec3 WoodColorSampler::sample(uint32_t triangle, const glm::vec3& weights,
+                                   float sampleSize) const {
+  const uint16_t material = mWood.materialIds[triangle];
+  const glm::vec3 base = mBaseColors[material];
+  if (mTextures[material] < 0) return base;
+  const LinearMipPyramid& texture = mPyramids[size_t(mTextures[material])];
+  glm::vec2 uv(0.0f);
+  glm::vec3 corners[3];
+  glm::vec2 uvs[3];
+  for (int k = 0; k < 3; ++k) {
+    const uint32_t vertex = mWood.indices[triangle * 3 + k];
+    corners[k] = mWood.positions[vertex];
+    uvs[k] = mWood.uvs[vertex];
+    uv += weights[k] * uvs[k];
+  }
+  // Texels per world unit over this triangle: the square root of its texel area over its area.
+  const glm::vec2 size(texture.size());
+  const glm::vec2 du = (uvs[1] - uvs[0]) * size, dv = (uvs[2] - uvs[0]) * size;
+  const float texelArea = std::abs(du.x * dv.y - du.y * dv.x);
+  const float area = glm::length(glm::cross(corners[1] - corners[0], corners[2] - corners[0]));
+  const float texelsPerUnit = area > 0.0f ? std::sqrt(texelArea / area) : 0.0f;
+  return base * glm::vec3(texture.sample(uv, sampleSize * texelsPerUnit));
 }
 
 void writeCoverageTexel(uint8_t* out, const glm::vec3& linearSum, int covered, int samples) {
@@ -107,7 +143,8 @@ ImageRgba8 renderCoverageImage(int size, int supersample,
 ImageRgba8 captureLeavesOrthographic(const Tree& tree, const LeafImageSampler& sampler,
                                      const std::vector<uint32_t>& leaves,
                                      const Billboard& billboard, int width, int height,
-                                     int supersample, bool fromBack) {
+                                     int supersample, bool fromBack, const WoodColorSampler* wood,
+                                     const std::vector<uint32_t>& woodTriangles) {
   const int sw = width * supersample, sh = height * supersample;
   std::vector<float> depth(size_t(sw) * sh, -std::numeric_limits<float>::infinity());
   std::vector<glm::vec3> color(size_t(sw) * sh, glm::vec3(0.0f));
@@ -158,6 +195,46 @@ ImageRgba8 captureLeavesOrthographic(const Tree& tree, const LeafImageSampler& s
         if (texel.a < 0.5f) continue;
         depth[s] = nearness;
         color[s] = glm::vec3(texel);
+      }
+    }
+  }
+  if (wood != nullptr) {
+    for (uint32_t triangle : woodTriangles) {
+      // Corners on the plane (x, y in samples) and their heights along the normal.
+      glm::vec2 at[3];
+      float height[3];
+      for (int k = 0; k < 3; ++k) {
+        const glm::vec3 p = tree.wood.positions[tree.wood.indices[triangle * 3 + k]];
+        const glm::vec2 q = billboard.toPlane(p) + billboard.halfExtents;
+        at[k] = {q.x / stepU, q.y / stepV};
+        height[k] = glm::dot(p - billboard.center, billboard.normal);
+      }
+      const float area =
+          (at[1].x - at[0].x) * (at[2].y - at[0].y) - (at[2].x - at[0].x) * (at[1].y - at[0].y);
+      if (std::abs(area) < 1e-12f) continue;  // edge-on
+      const glm::vec2 lo = glm::min(at[0], glm::min(at[1], at[2]));
+      const glm::vec2 hi = glm::max(at[0], glm::max(at[1], at[2]));
+      const int x0 = std::max(0, static_cast<int>(std::floor(lo.x)));
+      const int x1 = std::min(sw - 1, static_cast<int>(std::floor(hi.x)));
+      const int y0 = std::max(0, static_cast<int>(std::floor(lo.y)));
+      const int y1 = std::min(sh - 1, static_cast<int>(std::floor(hi.y)));
+      for (int y = y0; y <= y1; ++y) {
+        for (int x = x0; x <= x1; ++x) {
+          const glm::vec2 p(x + 0.5f, y + 0.5f);
+          // Barycentric weights of the sample centre; outside when any is negative.
+          const auto edge = [&](int a, int b) {
+            return ((at[b].x - at[a].x) * (p.y - at[a].y) - (p.x - at[a].x) * (at[b].y - at[a].y)) /
+                   area;
+          };
+          const glm::vec3 weights(edge(1, 2), edge(2, 0), edge(0, 1));
+          if (weights.x < 0.0f || weights.y < 0.0f || weights.z < 0.0f) continue;
+          const float t = weights.x * height[0] + weights.y * height[1] + weights.z * height[2];
+          const float nearness = fromBack ? -t : t;
+          const size_t s = size_t(y) * sw + x;
+          if (nearness <= depth[s]) continue;
+          depth[s] = nearness;
+          color[s] = wood->sample(triangle, weights, std::max(stepU, stepV));
+        }
       }
     }
   }

@@ -13,22 +13,51 @@
 
 namespace canopy {
 
-// Leaf images as linear float mip pyramids (straight alpha), sampled on the CPU by every bake
-// that projects leaves (billboard textures, leaf images at quantized orientations).
-class LeafImageSampler {
+// An sRGB RGBA image as a linear float mip pyramid (straight alpha; box-filtered levels with
+// colour weighted by alpha, so transparent texels do not darken edges), sampled on the CPU.
+class LinearMipPyramid {
  public:
-  explicit LeafImageSampler(const Tree& tree);
-  // Bilinear sample at uv (Canopy convention) from the mip level matching `footprint`, the leaf
-  // texels one sample covers; rgb linear, a straight alpha.
-  glm::vec4 sample(uint32_t texture, bool back, glm::vec2 uv, float footprint) const;
-  glm::ivec2 size(uint32_t texture) const;
+  explicit LinearMipPyramid(const ImageRgba8& image);
+  // Bilinear sample at uv (Canopy convention, clamped) from the level matching `footprint`, the
+  // base-level texels one sample covers; rgb linear, a straight alpha.
+  glm::vec4 sample(glm::vec2 uv, float footprint) const;
+  glm::ivec2 size() const { return {mLevels[0].width, mLevels[0].height}; }
 
  private:
   struct Level {
     int width = 0, height = 0;
     std::vector<glm::vec4> texels;
   };
-  std::vector<std::vector<Level>> mPyramids;  // [texture * 2 + back][level]
+  std::vector<Level> mLevels;
+};
+
+// Leaf images as linear float mip pyramids, sampled on the CPU by every bake that projects
+// leaves (billboard textures, leaf images at quantized orientations).
+class LeafImageSampler {
+ public:
+  explicit LeafImageSampler(const Tree& tree);
+  // LinearMipPyramid::sample of the texture's front or back image.
+  glm::vec4 sample(uint32_t texture, bool back, glm::vec2 uv, float footprint) const;
+  glm::ivec2 size(uint32_t texture) const;
+
+ private:
+  std::vector<LinearMipPyramid> mPyramids;  // [texture * 2 + back]
+};
+
+// The wood's albedo (material base colour × texture, linear) on the CPU, for bakes that capture
+// wood into images.
+class WoodColorSampler {
+ public:
+  explicit WoodColorSampler(const Tree& tree);
+  // The colour at barycentric coordinates `weights` of wood triangle `triangle`, its texture
+  // filtered over `sampleSize` world units (the capture's sample spacing over the triangle).
+  glm::vec3 sample(uint32_t triangle, const glm::vec3& weights, float sampleSize) const;
+
+ private:
+  const WoodMesh& mWood;
+  std::vector<glm::vec3> mBaseColors;  // linear, per material
+  std::vector<int> mTextures;          // per material: index into mPyramids, -1 for none
+  std::vector<LinearMipPyramid> mPyramids;
 };
 
 // Writes a texel from `samples` samples of which `covered` hit a leaf, `linearSum` their summed
@@ -48,11 +77,14 @@ ImageRgba8 renderCoverageImage(int size, int supersample,
 // texels with supersample² samples per texel; each leaf alpha-tested at 0.5, front or back image
 // by the side it turns to the camera. Texel (x, y) is the same plane point from either side, so
 // a back capture is sampled with the front's uv. Texel colour: the linear mean of covered
-// samples, sRGB-encoded; alpha: the covered fraction.
+// samples, sRGB-encoded; alpha: the covered fraction. With `wood`, the wood triangles
+// `woodTriangles` are seen too (opaque, their albedo), leaves and wood hiding one another by depth.
 ImageRgba8 captureLeavesOrthographic(const Tree& tree, const LeafImageSampler& sampler,
                                      const std::vector<uint32_t>& leaves,
                                      const Billboard& billboard, int width, int height,
-                                     int supersample, bool fromBack = false);
+                                     int supersample, bool fromBack = false,
+                                     const WoodColorSampler* wood = nullptr,
+                                     const std::vector<uint32_t>& woodTriangles = {});
 
 // Positions of rectangles in an atlas: shelves sorted by height, each rectangle inside a slot
 // with `padding` texels on every side, slots aligned to `alignment` texels (so the first

@@ -43,19 +43,18 @@ void setFrameUniforms(const gl::Program& program, const FrameContext& frame) {
   program.set("uDitherKeep", frame.ditherKeep);
 }
 
-void WoodRenderer::bake(const Tree& tree, bool levels) {
-  const WoodMesh& wood = tree.wood;
-  mVertices.clear();
-  for (size_t i = 0; i < wood.positions.size(); ++i)
-    mVertices.push_back({wood.positions[i], wood.normals[i], wood.uvs[i]});
-  // Triangles sorted by material so each material is one range.
+namespace {
+
+// The wood's triangles as indices sorted by material, so each material is one range.
+void sortByMaterial(const WoodMesh& wood, std::vector<uint32_t>& indices,
+                    std::vector<WoodRange>& ranges) {
   std::vector<uint32_t> order(wood.triangleCount());
   std::iota(order.begin(), order.end(), 0u);
   std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
     return wood.materialIds[a] < wood.materialIds[b];
   });
-  std::vector<uint32_t> indices;
-  std::vector<WoodRange> ranges;
+  indices.clear();
+  ranges.clear();
   for (uint32_t t : order) {
     const uint32_t material = wood.materialIds[t];
     if (ranges.empty() || ranges.back().material != material) {
@@ -64,13 +63,35 @@ void WoodRenderer::bake(const Tree& tree, bool levels) {
     for (int k = 0; k < 3; ++k) indices.push_back(wood.indices[t * 3 + k]);
     ranges.back().count += 3;
   }
+}
+
+}  // namespace
+
+void WoodRenderer::bake(const Tree& tree, bool levels, const std::vector<bool>& captured,
+                        float capturedBelowPixels) {
+  const WoodMesh& wood = tree.wood;
+  mVertices.clear();
+  for (size_t i = 0; i < wood.positions.size(); ++i)
+    mVertices.push_back({wood.positions[i], wood.normals[i], wood.uvs[i]});
   mBounds = tree.bounds;
   mSolid = wood.solid;
   // Error bounds from a thousandth of the tree's radius (sub-pixel at the closest views) to a
   // quarter of it (trees a few pixels tall).
   const float radius = 0.5f * glm::length(mBounds.extent());
-  mLevels = buildWoodLevels(wood.positions, indices, ranges, levels ? 1e-3f * radius : 0.0f,
-                            0.25f * radius);
+  const float finest = levels ? 1e-3f * radius : 0.0f, coarsest = 0.25f * radius;
+  std::vector<uint32_t> indices;
+  std::vector<WoodRange> ranges;
+  sortByMaterial(wood, indices, ranges);
+  mLevels = buildWoodLevels(wood.positions, indices, ranges, finest, coarsest);
+  if (!captured.empty()) {
+    // A vertex is in the images when every triangle around it is.
+    std::vector<bool> capturedVertices(wood.positions.size(), true);
+    for (size_t t = 0; t < wood.triangleCount(); ++t) {
+      if (captured[t]) continue;
+      for (int k = 0; k < 3; ++k) capturedVertices[wood.indices[t * 3 + k]] = false;
+    }
+    appendResidualLevels(mLevels, residualLevels(mLevels, capturedVertices), capturedBelowPixels);
+  }
   mMaterials = tree.woodMaterials;
   mTextures = tree.woodTextures;
 }
@@ -133,11 +154,16 @@ void WoodRenderer::draw(const FrameContext& frame, std::span<const Instance> ins
   }
   const std::vector<float> thresholds =
       mLevels.thresholds(0.5f * glm::length(mBounds.extent()), errorPixels);
+  // (With a residual chain the thresholds are never empty: small trees draw the residual.)
   if (thresholds.empty()) {
     drawLevel(0, frame.instanceBuffer, 0, static_cast<GLsizei>(instances.size()));
   } else {
     // One instanced draw per level and material: the instances sorted by level in one buffer.
-    mLod.update(frame, instances, mBounds, thresholds);
+    // A forced level (the viewer's) names the method's level, not the wood's: with a residual
+    // chain the wood follows the projected size, so it matches what the images hold.
+    FrameContext woodFrame = frame;
+    if (mLevels.hasResidual()) woodFrame.forcedLevel = -1;
+    mLod.update(woodFrame, instances, mBounds, thresholds);
     mLodUsed = true;
     const std::vector<LodInstances::Range>& levels = mLod.ranges();
     for (size_t level = 0; level < levels.size(); ++level) {
@@ -159,7 +185,9 @@ std::vector<uint64_t> WoodRenderer::instancesPerLevel() const {
 nlohmann::json WoodRenderer::describeLevels() const {
   nlohmann::json levels = nlohmann::json::array();
   for (size_t level = 0; level < mLevels.levels(); ++level)
-    levels.push_back({{"triangles", mLevels.triangles(level)}, {"error", mLevels.errors[level]}});
+    levels.push_back({{"triangles", mLevels.triangles(level)},
+                      {"error", mLevels.errors[level]},
+                      {"residual", mLevels.hasResidual() && level >= mLevels.residualFrom}});
   return levels;
 }
 
@@ -200,6 +228,8 @@ struct WoodFields {
     std::vector<WoodMaterialFields> materials;
     size_t textures = 0;
     std::vector<WoodLevelFields> levels;
+    size_t residualFrom = 0;           // WoodLevels::residualFrom
+    float residualBelowPixels = 0.0f;  // WoodLevels::residualBelowPixels
     std::array<float, 3> boundsMin{}, boundsMax{};
     bool solid = false;
     template <class V>
@@ -208,6 +238,8 @@ struct WoodFields {
       v("solid", solid);
       v("textures", textures);
       v("levels", levels);
+      v("residual_from", residualFrom);
+      v("residual_below_px", residualBelowPixels);
       v("bounds_min", boundsMin);
       v("bounds_max", boundsMax);
     }
@@ -228,6 +260,8 @@ void WoodRenderer::save(AssetFolder& asset) const {
   for (size_t level = 0; level < mLevels.levels(); ++level) {
     fields.wood.levels.push_back({mLevels.rangesPerLevel[level], mLevels.errors[level]});
   }
+  fields.wood.residualFrom = mLevels.residualFrom;
+  fields.wood.residualBelowPixels = mLevels.residualBelowPixels;
   fields.wood.boundsMin = {mBounds.min.x, mBounds.min.y, mBounds.min.z};
   fields.wood.boundsMax = {mBounds.max.x, mBounds.max.y, mBounds.max.z};
   for (const WoodMaterial& m : mMaterials) {
@@ -252,6 +286,8 @@ void WoodRenderer::load(AssetFolder& asset) {
     mLevels.rangesPerLevel.push_back(level.ranges);
     mLevels.errors.push_back(level.error);
   }
+  mLevels.residualFrom = fields.wood.residualFrom;
+  mLevels.residualBelowPixels = fields.wood.residualBelowPixels;
   const auto& lo = fields.wood.boundsMin;
   const auto& hi = fields.wood.boundsMax;
   mBounds = {glm::vec3(lo[0], lo[1], lo[2]), glm::vec3(hi[0], hi[1], hi[2])};

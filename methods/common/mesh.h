@@ -50,7 +50,11 @@ struct WoodParams {
 // hundred triangles and branches thinner than that vanish.
 class WoodRenderer {
  public:
-  void bake(const Tree& tree, bool levels);
+  // `captured` (empty, or one flag per wood triangle): triangles the method's images hold for
+  // trees whose projected radius is below `capturedBelowPixels`; such trees draw only the rest
+  // (WoodLevels' residual chain).
+  void bake(const Tree& tree, bool levels, const std::vector<bool>& captured = {},
+            float capturedBelowPixels = 0.0f);
   void upload(gl::Device& device, bool mipmaps);
   // Draws `instances` (also in frame.instanceBuffer, in span order).
   void draw(const FrameContext& frame, std::span<const Instance> instances,

@@ -13,9 +13,20 @@ size_t WoodLevels::firstRange(size_t level) const {
 
 std::vector<float> WoodLevels::thresholds(float treeRadius, float errorPixels) const {
   std::vector<float> result;
-  if (errorPixels <= 0.0f) return result;  // the full mesh always
-  for (size_t level = 1; level < levels(); ++level)
-    result.push_back(errorPixels * treeRadius / std::max(errors[level], 1e-12f));
+  // Below this radius a level's error spans at most errorPixels (never, with errorPixels 0).
+  const auto allowedBelow = [&](size_t level) {
+    return errorPixels <= 0.0f ? 0.0f : errorPixels * treeRadius / std::max(errors[level], 1e-12f);
+  };
+  if (!hasResidual()) {
+    if (errorPixels <= 0.0f) return result;  // the full mesh always
+    for (size_t level = 1; level < levels(); ++level) result.push_back(allowedBelow(level));
+    return result;
+  }
+  for (size_t level = 1; level < residualFrom; ++level)
+    result.push_back(std::max(allowedBelow(level), residualBelowPixels));
+  result.push_back(residualBelowPixels);  // the residual chain's first level
+  for (size_t level = residualFrom + 1; level < levels(); ++level)
+    result.push_back(std::min(allowedBelow(level), residualBelowPixels));
   return result;
 }
 
@@ -34,8 +45,9 @@ bool WoodLevels::consistent() const {
     next += range.count;
   }
   if (next != indices.size()) return false;
+  if (residualFrom >= levels() || (hasResidual() && !(residualBelowPixels > 0.0f))) return false;
   for (size_t level = 1; level < levels(); ++level) {
-    if (!(errors[level] >= errors[level - 1])) return false;
+    if (level != residualFrom && !(errors[level] >= errors[level - 1])) return false;
   }
   return true;
 }
@@ -123,6 +135,44 @@ WoodLevels buildWoodLevels(const std::vector<glm::vec3>& positions,
     previous = level.indices.size();
   }
   return levels;
+}
+
+WoodLevels residualLevels(const WoodLevels& full, const std::vector<bool>& captured) {
+  WoodLevels residual;
+  residual.errors = full.errors;
+  for (size_t level = 0; level < full.levels(); ++level) {
+    const size_t begin = full.firstRange(level);
+    uint32_t ranges = 0;
+    for (size_t r = begin; r < begin + full.rangesPerLevel[level]; ++r) {
+      const WoodRange& range = full.ranges[r];
+      WoodRange kept{uint32_t(residual.indices.size()), 0, range.material};
+      for (uint32_t i = range.first; i < range.first + range.count; i += 3) {
+        const uint32_t* corner = &full.indices[i];
+        if (captured[corner[0]] && captured[corner[1]] && captured[corner[2]]) continue;
+        residual.indices.insert(residual.indices.end(), corner, corner + 3);
+        kept.count += 3;
+      }
+      if (kept.count == 0) continue;
+      residual.ranges.push_back(kept);
+      ++ranges;
+    }
+    residual.rangesPerLevel.push_back(ranges);
+  }
+  return residual;
+}
+
+void appendResidualLevels(WoodLevels& levels, const WoodLevels& residual, float belowPixels) {
+  levels.residualFrom = levels.levels();
+  levels.residualBelowPixels = belowPixels;
+  const auto offset = uint32_t(levels.indices.size());
+  for (WoodRange range : residual.ranges) {
+    range.first += offset;
+    levels.ranges.push_back(range);
+  }
+  levels.indices.insert(levels.indices.end(), residual.indices.begin(), residual.indices.end());
+  levels.rangesPerLevel.insert(levels.rangesPerLevel.end(), residual.rangesPerLevel.begin(),
+                               residual.rangesPerLevel.end());
+  levels.errors.insert(levels.errors.end(), residual.errors.begin(), residual.errors.end());
 }
 
 }  // namespace canopy

@@ -11,7 +11,9 @@
 #include "common/error.h"
 #include "common/metrics.h"
 #include "common/random.h"
+#include "methods/common/leaf_capture.h"
 #include "methods/common/mipmaps.h"
+#include "methods/common/wood_capture.h"
 #include "methods/method.h"
 #include "test_support.h"
 
@@ -314,6 +316,59 @@ TEST(BillboardCapture, BillboardSeenAlongItsNormalMatchesItsLeaves) {
   EXPECT_GT(metrics.psnr, 20.0) << "ssim " << metrics.ssim << " coverage error "
                                 << metrics.coverageError;
   EXPECT_LT(metrics.coverageError, 0.15);
+}
+
+// Wood in billboard images (wood_capture_px): a triangle goes to the nearest plane whose
+// rectangle holds it within the distance bound, and the capture draws it opaque in its albedo
+// over exactly its projected area.
+TEST(WoodCapture, NearestPlaneWithinTheBoundHoldsTheTriangleAndTheImageShowsIt) {
+  Tree tree;
+  tree.woodMaterials = {{"bark", glm::vec4(0.5f, 0.25f, 0.125f, 1.0f), -1}};
+  const auto addTriangle = [&](glm::vec3 a, glm::vec3 b, glm::vec3 c) {
+    for (const glm::vec3& p : {a, b, c}) {
+      tree.wood.indices.push_back(uint32_t(tree.wood.positions.size()));
+      tree.wood.positions.push_back(p);
+      tree.wood.normals.emplace_back(0.0f, 0.0f, 1.0f);
+      tree.wood.uvs.emplace_back(0.0f);
+    }
+    tree.wood.materialIds.push_back(0);
+  };
+  addTriangle({-0.5f, -0.5f, 0.01f}, {0.5f, -0.5f, 0.01f}, {-0.5f, 0.5f, 0.02f});  // in plane 0
+  addTriangle({-0.5f, -0.5f, 0.5f}, {0.5f, -0.5f, 0.5f}, {-0.5f, 0.5f, 0.5f});     // too far
+  addTriangle({0.5f, 0.5f, 0.0f}, {1.5f, 0.5f, 0.0f}, {0.5f, 0.9f, 0.0f});         // sticks out
+  addTriangle({-0.5f, -0.5f, 0.05f}, {0.5f, -0.5f, 0.05f}, {-0.5f, 0.5f, 0.04f});  // plane 1
+  std::vector<Billboard> planes(2);
+  for (int i = 0; i < 2; ++i) {
+    planes[size_t(i)].center = {0.0f, 0.0f, 0.06f * float(i)};
+    planes[size_t(i)].halfExtents = {1.0f, 1.0f};
+  }
+  const auto assigned = assignWoodToBillboards(tree.wood, planes, 0.1f);
+  EXPECT_EQ(assigned[0], std::vector<uint32_t>{0});
+  EXPECT_EQ(assigned[1], std::vector<uint32_t>{3});
+  EXPECT_TRUE(assignWoodToBillboards(tree.wood, planes, 0.005f)[0].empty())
+      << "0.01–0.02 off the plane is beyond a 0.005 bound";
+
+  const LeafImageSampler leaves(tree);
+  const WoodColorSampler colors(tree);
+  for (const bool back : {false, true}) {
+    const ImageRgba8 image = captureLeavesOrthographic(tree, leaves, {}, planes[0], 64, 64, 4, back,
+                                                       &colors, assigned[0]);
+    double covered = 0.0;
+    for (int y = 0; y < 64; ++y) {
+      for (int x = 0; x < 64; ++x) {
+        covered += image.at(x, y)[3] / 255.0;
+        // Texel centres well inside the triangle (u, v in texels from (−1, −1)).
+        const float u = (x + 0.5f) / 32.0f - 1.0f, v = (y + 0.5f) / 32.0f - 1.0f;
+        if (u > -0.45f && v > -0.45f && u + v < -0.05f) {
+          ASSERT_EQ(image.at(x, y)[3], 255) << x << "," << y;
+          EXPECT_NEAR(image.at(x, y)[0], 0.5 * 255, 1.5);  // the base colour, sRGB as stored
+          EXPECT_NEAR(image.at(x, y)[1], 0.25 * 255, 1.5);
+        }
+      }
+    }
+    // The triangle's area, 0.5, over the 2 × 2 plane is 1/8 of the 4096 texels.
+    EXPECT_NEAR(covered / (64.0 * 64.0), 0.125, 0.005) << (back ? "back" : "front");
+  }
 }
 
 }  // namespace

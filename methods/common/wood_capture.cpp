@@ -1,0 +1,49 @@
+#include "methods/common/wood_capture.h"
+
+#include <cmath>
+#include <limits>
+
+#include <glm/geometric.hpp>
+
+namespace canopy {
+
+std::vector<std::vector<uint32_t>> assignWoodToBillboards(const WoodMesh& wood,
+                                                          const std::vector<Billboard>& billboards,
+                                                          float maxDistance) {
+  std::vector<std::vector<uint32_t>> assigned(billboards.size());
+  for (uint32_t triangle = 0; triangle < wood.triangleCount(); ++triangle) {
+    size_t best = billboards.size();
+    float bestAlignment = -1.0f, bestDistance = std::numeric_limits<float>::max();
+    const glm::vec3 a = wood.positions[wood.indices[triangle * 3]];
+    const glm::vec3 cross = glm::cross(wood.positions[wood.indices[triangle * 3 + 1]] - a,
+                                       wood.positions[wood.indices[triangle * 3 + 2]] - a);
+    const float length = glm::length(cross);
+    const glm::vec3 normal = length > 0.0f ? cross / length : glm::vec3(0.0f);
+    for (size_t b = 0; b < billboards.size(); ++b) {
+      const Billboard& billboard = billboards[b];
+      float distance = 0.0f;
+      bool inside = true;
+      for (int k = 0; k < 3 && inside; ++k) {
+        const glm::vec3 p = wood.positions[wood.indices[triangle * 3 + k]];
+        const glm::vec2 q = billboard.toPlane(p);
+        inside =
+            std::abs(q.x) <= billboard.halfExtents.x && std::abs(q.y) <= billboard.halfExtents.y;
+        distance = std::max(distance, std::abs(glm::dot(p - billboard.center, billboard.normal)));
+      }
+      if (!inside || distance > maxDistance) continue;
+      // Most squarely facing first: the facet keeps its projected area in that plane's image
+      // from every view, as a leaf does in a plane of its orientation; then the nearest.
+      const float alignment = std::abs(glm::dot(normal, billboard.normal));
+      if (alignment > bestAlignment + 1e-4f ||
+          (alignment > bestAlignment - 1e-4f && distance < bestDistance)) {
+        best = b;
+        bestAlignment = alignment;
+        bestDistance = distance;
+      }
+    }
+    if (best < billboards.size()) assigned[best].push_back(triangle);
+  }
+  return assigned;
+}
+
+}  // namespace canopy
