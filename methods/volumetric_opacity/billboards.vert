@@ -4,6 +4,7 @@
 // faces the viewer; each of the two input cameras' textures is laid on it in that camera's own
 // image axes turned towards the viewer (roll kept), so vTexel0/1 are texel coordinates in each.
 layout(std430, binding = 0) readonly buffer CellCoords { uint cellCoords[]; };
+// Back-to-front orders (PackedOrders): 16-bit cell indices, two to a word, when uOrders16.
 layout(std430, binding = 1) readonly buffer CellOrders { uint cellOrder[]; };
 // Per cell: its first tile, then the mask of the views that have one (tiles stored cell by cell).
 layout(std430, binding = 2) readonly buffer TileTable { uint tileTable[]; };
@@ -16,7 +17,10 @@ uniform float uCellSize;
 uniform int uCellBase;     // the level's first entry in cellCoords
 uniform int uTileBase;     // the level's first entry in tileTable
 uniform int uTableStride;  // words per cell in tileTable
-uniform int uOrderOffset;  // the order of the draw's direction in cellOrder
+uniform int uOrderOffset;  // the stored order's first element in cellOrder
+uniform int uOrderReversed;  // 1: the opposite direction's order, walked backwards
+uniform int uOrders16;
+uniform int uCellCount;  // cells of the level (elements of one order)
 uniform int uCamera0;      // the two input cameras closest in direction
 uniform int uCamera1;
 uniform vec3 uQuadRight;  // model-space axes and half extents of the quad
@@ -64,7 +68,9 @@ vec2 texelOf(vec3 offset, vec3 axisRight, vec3 axisUp) {
 void main() {
   uint k = uint(gl_VertexID) / 6u;
   vec2 corner = kCorners[uint(gl_VertexID) % 6u];
-  uint cell = cellOrder[uint(uOrderOffset) + k];
+  uint element = uint(uOrderOffset) + (uOrderReversed != 0 ? uint(uCellCount) - 1u - k : k);
+  uint cell = uOrders16 != 0 ? (cellOrder[element >> 1] >> (16u * (element & 1u))) & 0xffffu
+                             : cellOrder[element];
   uint tile0 = tileOf(uint(uCamera0), cell);
   uint tile1 = tileOf(uint(uCamera1), cell);
   vOrigin0 = originOf(tile0);

@@ -44,6 +44,40 @@ void buildOrders(VolumetricLevel& level) {
   }
 }
 
+PackedOrders packOrders(const std::vector<VolumetricLevel>& levels) {
+  PackedOrders packed;
+  packed.sixteenBit = std::all_of(levels.begin(), levels.end(), [](const VolumetricLevel& level) {
+    return level.grid.cells.size() <= 65536;
+  });
+  size_t elements = 0;
+  std::vector<uint32_t> values;
+  for (const VolumetricLevel& level : levels) {
+    packed.levelOffsets.push_back(elements);
+    const size_t n = level.grid.cells.size();
+    values.insert(values.end(), level.orders.begin(),
+                  level.orders.begin() + std::ptrdiff_t(PackedOrders::kStoredDirections * n));
+    elements += PackedOrders::kStoredDirections * n;
+  }
+  if (!packed.sixteenBit) {
+    packed.words = std::move(values);
+    return packed;
+  }
+  packed.words.assign((values.size() + 1) / 2, 0);
+  for (size_t i = 0; i < values.size(); ++i) packed.words[i / 2] |= values[i] << (16 * (i % 2));
+  return packed;
+}
+
+std::pair<size_t, bool> PackedOrders::lookup(size_t level, size_t direction, size_t cells) const {
+  const bool reversed = direction >= kStoredDirections;
+  const size_t stored = reversed ? size_t(kOrderDirections) - 1 - direction : direction;
+  return {levelOffsets[level] + stored * cells, reversed};
+}
+
+uint32_t PackedOrders::cellAt(size_t first, bool reversed, size_t cells, size_t position) const {
+  const size_t i = first + (reversed ? cells - 1 - position : position);
+  return sixteenBit ? (words[i / 2] >> (16 * (i % 2))) & 0xffffu : words[i];
+}
+
 std::vector<uint32_t> compactTileTable(const std::vector<uint32_t>& tileOfViewCell, size_t views,
                                        size_t cells, uint32_t first) {
   const size_t stride = tableStride(views);

@@ -45,6 +45,24 @@ size_t nearestOrder(const glm::vec3& direction);
 // Fills level.orders from level.grid.
 void buildOrders(VolumetricLevel& level);
 
+// The orders as the GPU holds them. Direction d's opposite is 25 − d (orderDirections lists the
+// cube's neighbours lexicographically), and its order sorts by the negated key, so it is d's
+// order walked backwards: only the first 13 directions are stored. Cell indices are 16-bit, two
+// to a word, when every level has at most 65,536 cells. A quarter of the 26 × 32-bit orders.
+struct PackedOrders {
+  static constexpr size_t kStoredDirections = kOrderDirections / 2;
+  std::vector<uint32_t> words;
+  bool sixteenBit = false;
+  std::vector<size_t> levelOffsets;  // each level's first element (16-bit units when packed)
+
+  // Where a draw along order `direction` finds its cells: the stored order's first element
+  // and whether it is walked backwards.
+  std::pair<size_t, bool> lookup(size_t level, size_t direction, size_t cells) const;
+  // The cell at `position` (0: farthest from the viewer) of that draw: what the shader computes.
+  uint32_t cellAt(size_t first, bool reversed, size_t cells, size_t position) const;
+};
+PackedOrders packOrders(const std::vector<VolumetricLevel>& levels);
+
 // Everything a draw reads: the levels and every level's tiles in one atlas.
 struct VolumetricModel {
   std::vector<VolumetricLevel> levels;

@@ -193,15 +193,16 @@ class VolumetricOpacity final : public Method {
 
   void upload(gl::Device& device) override {
     using gl::MemoryCategory;
-    std::vector<uint32_t> coords, tiles, orders;
+    std::vector<uint32_t> coords, tiles;
     mLevelBases.clear();
     for (const VolumetricLevel& level : mModel.levels) {
-      mLevelBases.push_back({coords.size(), tiles.size(), orders.size()});
+      mLevelBases.push_back({coords.size(), tiles.size()});
       for (const glm::ivec3& c : level.grid.cells)
         coords.push_back(uint32_t(c.x) | uint32_t(c.y) << 10 | uint32_t(c.z) << 20);
       tiles.insert(tiles.end(), level.table.begin(), level.table.end());
-      orders.insert(orders.end(), level.orders.begin(), level.orders.end());
     }
+    mOrders = packOrders(mModel.levels);
+    std::vector<uint32_t> orders = mOrders.words;
     const auto storage = [&](MemoryCategory category, std::vector<uint32_t>& data,
                              const char* label) {
       // Storage buffers may not be empty; one word stands in for nothing.
@@ -348,8 +349,9 @@ class VolumetricOpacity final : public Method {
                         {"empty_textures", level.emptyTiles},
                         {"hidden_textures", level.hiddenTiles}});
       tableBytes += level.table.size() * 4;
-      geometryBytes += level.grid.cells.size() * 4 * (1 + kOrderDirections);
+      geometryBytes += level.grid.cells.size() * 4;  // the packed coordinates
     }
+    geometryBytes += packOrders(mModel.levels).words.size() * 4;
     const uint64_t atlasBytes = mModel.textureBytes();
     mReport["levels"] = levels;
     mReport["textures"] = {{"texels", mParams.texels},
@@ -419,8 +421,12 @@ class VolumetricOpacity final : public Method {
     mProgram.set("uCellBase", int(bases.cell));
     mProgram.set("uTileBase", int(bases.table));
     mProgram.set("uTableStride", int(tableStride(mModel.cameraDirections.size())));
-    mProgram.set("uOrderOffset",
-                 int(bases.order + nearestOrder(direction) * level.grid.cells.size()));
+    const auto [orderFirst, orderReversed] =
+        mOrders.lookup(l, nearestOrder(direction), level.grid.cells.size());
+    mProgram.set("uOrderOffset", int(orderFirst));
+    mProgram.set("uOrderReversed", orderReversed ? 1 : 0);
+    mProgram.set("uOrders16", mOrders.sixteenBit ? 1 : 0);
+    mProgram.set("uCellCount", int(level.grid.cells.size()));
     mProgram.set("uQuadRight", right);
     mProgram.set("uQuadUp", up);
     mProgram.set("uQuadHalf", half);
@@ -464,9 +470,10 @@ class VolumetricOpacity final : public Method {
   gl::VertexArray mVao;
   // Where each level starts in the shared storage buffers (set at upload).
   struct LevelBases {
-    size_t cell, table, order;
+    size_t cell, table;
   };
   std::vector<LevelBases> mLevelBases;
+  PackedOrders mOrders;  // the back-to-front orders as uploaded
   uint64_t mSignature = 0;
   std::vector<uint64_t> mInstancesPerLevel;  // of the last draw
 };

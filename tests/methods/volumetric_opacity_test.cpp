@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <limits>
 #include <numeric>
 #include <set>
 #include <tuple>
@@ -374,6 +375,47 @@ TEST(VolumetricOpacity, RejectsParametersOutOfRangeNamingTheKey) {
                                                                {"solver", "gradient"},
                                                                {"views", 1},
                                                                {"ray_stride", 0}});
+}
+
+// The orders as uploaded: 13 stored directions (the other 13 walked backwards) in 16-bit cells
+// still give, for every one of the 26 directions, every cell once, farthest from a viewer along
+// that direction first; a level of more than 65,536 cells keeps 32-bit cells.
+TEST(VolumetricOrders, PackedOrdersWalkEveryDirectionBackToFront) {
+  std::vector<VolumetricLevel> levels(2);
+  levels[0].grid = randomVolume(3);
+  levels[1].grid = randomVolume(4);
+  for (VolumetricLevel& level : levels) buildOrders(level);
+  const PackedOrders packed = packOrders(levels);
+  EXPECT_TRUE(packed.sixteenBit);
+  size_t full = 0;
+  for (const VolumetricLevel& level : levels) full += level.orders.size() * 4;
+  EXPECT_LE(packed.words.size() * 4, full / 4 + 4) << "a quarter of the 26 32-bit orders";
+  const std::vector<glm::vec3> directions = orderDirections();
+  ASSERT_EQ(directions.size(), size_t(kOrderDirections));
+  for (size_t l = 0; l < levels.size(); ++l) {
+    const OpacityGrid& grid = levels[l].grid;
+    const size_t n = grid.cells.size();
+    for (size_t d = 0; d < directions.size(); ++d) {
+      const auto [first, reversed] = packed.lookup(l, d, n);
+      std::set<uint32_t> seen;
+      float previous = -std::numeric_limits<float>::infinity();
+      for (size_t position = 0; position < n; ++position) {
+        const uint32_t cell = packed.cellAt(first, reversed, n, position);
+        ASSERT_LT(cell, n);
+        seen.insert(cell);
+        const float key = glm::dot(grid.cellCenter(cell), directions[d]);
+        EXPECT_GE(key, previous - 1e-5f) << "level " << l << " direction " << d;
+        previous = key;
+      }
+      EXPECT_EQ(seen.size(), n) << "every cell once";
+    }
+  }
+  VolumetricLevel large;
+  large.grid.cells.resize(65537);
+  large.orders.assign(size_t(kOrderDirections) * 65537, 65536u);
+  const PackedOrders wide = packOrders({large});
+  EXPECT_FALSE(wide.sixteenBit);
+  EXPECT_EQ(wide.cellAt(wide.lookup(0, 20, 65537).first, true, 65537, 7), 65536u);
 }
 
 }  // namespace
