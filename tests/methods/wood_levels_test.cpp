@@ -229,17 +229,25 @@ TEST(WoodLevels, MaterialsStaySeparateAndNoBoundMeansOneLevel) {
 namespace canopy {
 namespace {
 
+// A GL context, a 128² harness and the small L-system tree the wood tests draw.
+class WoodInImpostors : public testing::Test {
+ protected:
+  WoodInImpostors() { harness.setTree(tree.bounds, tree.leaves.size()); }
+  static RenderSettings settings128() {
+    RenderSettings settings;
+    settings.width = settings.height = 128;
+    return settings;
+  }
+  std::unique_ptr<gl::Context> context = test::makeTestContext();
+  gl::Ledger ledger;
+  gl::Device device{ledger};
+  const Tree tree = test::smallTree(400, 3);
+  Harness harness{device, settings128()};
+};
+
 // The wood levels inside an impostor: a far tree draws far fewer wood triangles than with the
 // full mesh, and at a bound below a pixel a near view is the full mesh's, pixel for pixel.
-TEST(WoodLevelsDrawn, FarTreesDrawCoarseWoodAndNearViewsTheFullMesh) {
-  auto context = test::makeTestContext();
-  gl::Ledger ledger;
-  gl::Device device(ledger);
-  const Tree tree = test::smallTree(400, 3);
-  RenderSettings settings;
-  settings.width = settings.height = 128;
-  Harness harness(device, settings);
-  harness.setTree(tree.bounds, tree.leaves.size());
+TEST_F(WoodInImpostors, FarTreesDrawCoarseWoodAndNearViewsTheFullMesh) {
   auto full = test::bakeAndUpload(device, tree, "billboard_cloud", {{"wood_error_px", 0.0}});
   auto coarse = test::bakeAndUpload(device, tree, "billboard_cloud", {{"wood_error_px", 1.0}},
                                     Shading::kUnlit, "coarse");
@@ -272,15 +280,7 @@ TEST(WoodLevelsDrawn, FarTreesDrawCoarseWoodAndNearViewsTheFullMesh) {
 // Wood captured into the middle and far clouds' images (wood_capture_px): a tree drawn with those
 // clouds draws only the residual wood, keeps its coverage (the images hold the rest), and a
 // near tree, drawn with the finest cloud, still draws the full chain.
-TEST(WoodLevelsDrawn, CapturedWoodIsInTheImagesNotTheGeometry) {
-  auto context = test::makeTestContext();
-  gl::Ledger ledger;
-  gl::Device device(ledger);
-  const Tree tree = test::smallTree(400, 3);
-  RenderSettings settings;
-  settings.width = settings.height = 128;
-  Harness harness(device, settings);
-  harness.setTree(tree.bounds, tree.leaves.size());
+TEST_F(WoodInImpostors, CapturedWoodIsInTheImagesNotTheGeometry) {
   auto reference = test::bakeAndUpload(device, tree, "polygonal", nlohmann::json::object());
   auto plain = test::bakeAndUpload(device, tree, "billboard_cloud", {{"wood_capture_px", 0.0}},
                                    Shading::kUnlit, "plain");
