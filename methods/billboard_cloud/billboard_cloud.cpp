@@ -86,7 +86,11 @@ class BillboardCloudMethod final : public Method {
         sizes.emplace_back(texels(billboard.halfExtents.x), texels(billboard.halfExtents.y));
       }
     }
-    const WoodInImages woodInImages = captureWood(tree, clouds);
+    // The middle and far clouds' images hold the wood trees drawn with them do not draw.
+    const WoodInImages woodInImages = captureWoodInImages(
+        tree, clouds, 1, {mParams.cloud.lodNearPixels, mParams.cloud.lodFarPixels},
+        mParams.wood.draw ? mParams.woodCapturePixels : 0.0f);
+    mReport["wood_captured"] = woodInImages.report;
     mWood.bake(tree, mParams.wood.levels(), woodInImages.captured, mParams.cloud.lodNearPixels);
     const AtlasLayout preview = packAtlas(sizes, kAtlasPadding, kAtlasAlignment);
     if (preview.width > kMaxAtlas || preview.height > kMaxAtlas) {
@@ -197,53 +201,6 @@ class BillboardCloudMethod final : public Method {
   }
 
  private:
-  // The wood the middle and far clouds' images hold (wood_capture_px).
-  struct WoodInImages {
-    std::vector<bool> captured;                       // per wood triangle; empty: none
-    std::vector<std::vector<uint32_t>> perBillboard;  // over every cloud's billboards in order
-  };
-
-  // A triangle is captured when every image cloud (the middle and far ones) can hold it within
-  // its flattening bound, so the images hold exactly the wood those trees do not draw. Records
-  // the bounds and the count in the report.
-  WoodInImages captureWood(const Tree& tree, const std::vector<BillboardCloud>& clouds) {
-    WoodInImages result;
-    size_t total = 0;
-    for (const BillboardCloud& cloud : clouds) total += cloud.billboards.size();
-    result.perBillboard.resize(total);
-    mReport["wood_captured"] = {{"triangles", 0}};
-    if (!mParams.wood.draw || mParams.woodCapturePixels <= 0.0f || clouds.size() < 3) return result;
-    const float radius = 0.5f * glm::length(tree.bounds.extent());
-    // The largest projected radius each image cloud is drawn at.
-    const std::vector<float> largest = {mParams.cloud.lodNearPixels, mParams.cloud.lodFarPixels};
-    std::vector<std::vector<std::vector<uint32_t>>> assigned;
-    nlohmann::json bounds = nlohmann::json::array();
-    result.captured.assign(tree.wood.triangleCount(), true);
-    for (size_t c = 1; c < clouds.size(); ++c) {
-      const float maxDistance = mParams.woodCapturePixels * radius / largest[c - 1];
-      bounds.push_back(maxDistance);
-      assigned.push_back(assignWoodToBillboards(tree.wood, clouds[c].billboards, maxDistance));
-      std::vector<bool> inCloud(tree.wood.triangleCount(), false);
-      for (const auto& triangles : assigned.back())
-        for (uint32_t t : triangles) inCloud[t] = true;
-      for (size_t t = 0; t < inCloud.size(); ++t)
-        result.captured[t] = result.captured[t] && inCloud[t];
-    }
-    size_t first = clouds[0].billboards.size();
-    for (const auto& cloud : assigned) {
-      for (const auto& triangles : cloud) {
-        for (uint32_t t : triangles)
-          if (result.captured[t]) result.perBillboard[first].push_back(t);
-        ++first;
-      }
-    }
-    const auto count = size_t(std::count(result.captured.begin(), result.captured.end(), true));
-    mReport["wood_captured"] = {{"triangles", count},
-                                {"max_plane_distance", bounds},
-                                {"below_px", mParams.cloud.lodNearPixels}};
-    return result;
-  }
-
   static constexpr int kMaxAtlas = 16384;
   BillboardCloudParams mParams;
   nlohmann::json mReport;

@@ -140,6 +140,53 @@ ImageRgba8 renderCoverageImage(int size, int supersample,
   return image;
 }
 
+void rasterizeWoodOrthographic(const Tree& tree, const WoodColorSampler& wood,
+                               const std::vector<uint32_t>& triangles, const Billboard& billboard,
+                               bool fromBack, OrthographicSamples& samples) {
+  const int sw = samples.width, sh = samples.height;
+  const float stepU = 2.0f * billboard.halfExtents.x / float(sw);
+  const float stepV = 2.0f * billboard.halfExtents.y / float(sh);
+  for (uint32_t triangle : triangles) {
+    // Corners on the plane (x, y in samples) and their heights along the normal.
+    glm::vec2 at[3];
+    float height[3];
+    for (int k = 0; k < 3; ++k) {
+      const glm::vec3 p = tree.wood.positions[tree.wood.indices[triangle * 3 + k]];
+      const glm::vec2 q = billboard.toPlane(p) + billboard.halfExtents;
+      at[k] = {q.x / stepU, q.y / stepV};
+      height[k] = glm::dot(p - billboard.center, billboard.normal);
+    }
+    const float area =
+        (at[1].x - at[0].x) * (at[2].y - at[0].y) - (at[2].x - at[0].x) * (at[1].y - at[0].y);
+    if (std::abs(area) < 1e-12f) continue;  // edge-on
+    const glm::vec2 lo = glm::min(at[0], glm::min(at[1], at[2]));
+    const glm::vec2 hi = glm::max(at[0], glm::max(at[1], at[2]));
+    const int x0 = std::max(0, static_cast<int>(std::floor(lo.x)));
+    const int x1 = std::min(sw - 1, static_cast<int>(std::floor(hi.x)));
+    const int y0 = std::max(0, static_cast<int>(std::floor(lo.y)));
+    const int y1 = std::min(sh - 1, static_cast<int>(std::floor(hi.y)));
+    for (int y = y0; y <= y1; ++y) {
+      for (int x = x0; x <= x1; ++x) {
+        const glm::vec2 p(x + 0.5f, y + 0.5f);
+        // Barycentric weights of the sample centre; outside when any is negative.
+        const auto edge = [&](int a, int b) {
+          return ((at[b].x - at[a].x) * (p.y - at[a].y) - (p.x - at[a].x) * (at[b].y - at[a].y)) /
+                 area;
+        };
+        const glm::vec3 weights(edge(1, 2), edge(2, 0), edge(0, 1));
+        if (weights.x < 0.0f || weights.y < 0.0f || weights.z < 0.0f) continue;
+        const float t = weights.x * height[0] + weights.y * height[1] + weights.z * height[2];
+        const float nearness = fromBack ? -t : t;
+        const size_t s = size_t(y) * sw + x;
+        if (nearness <= samples.nearness[s]) continue;
+        samples.nearness[s] = nearness;
+        samples.color[s] = wood.sample(triangle, weights, std::max(stepU, stepV));
+        if (samples.wood) (*samples.wood)[s] = true;
+      }
+    }
+  }
+}
+
 ImageRgba8 captureLeavesOrthographic(const Tree& tree, const LeafImageSampler& sampler,
                                      const std::vector<uint32_t>& leaves,
                                      const Billboard& billboard, int width, int height,
@@ -199,44 +246,8 @@ ImageRgba8 captureLeavesOrthographic(const Tree& tree, const LeafImageSampler& s
     }
   }
   if (wood != nullptr) {
-    for (uint32_t triangle : woodTriangles) {
-      // Corners on the plane (x, y in samples) and their heights along the normal.
-      glm::vec2 at[3];
-      float height[3];
-      for (int k = 0; k < 3; ++k) {
-        const glm::vec3 p = tree.wood.positions[tree.wood.indices[triangle * 3 + k]];
-        const glm::vec2 q = billboard.toPlane(p) + billboard.halfExtents;
-        at[k] = {q.x / stepU, q.y / stepV};
-        height[k] = glm::dot(p - billboard.center, billboard.normal);
-      }
-      const float area =
-          (at[1].x - at[0].x) * (at[2].y - at[0].y) - (at[2].x - at[0].x) * (at[1].y - at[0].y);
-      if (std::abs(area) < 1e-12f) continue;  // edge-on
-      const glm::vec2 lo = glm::min(at[0], glm::min(at[1], at[2]));
-      const glm::vec2 hi = glm::max(at[0], glm::max(at[1], at[2]));
-      const int x0 = std::max(0, static_cast<int>(std::floor(lo.x)));
-      const int x1 = std::min(sw - 1, static_cast<int>(std::floor(hi.x)));
-      const int y0 = std::max(0, static_cast<int>(std::floor(lo.y)));
-      const int y1 = std::min(sh - 1, static_cast<int>(std::floor(hi.y)));
-      for (int y = y0; y <= y1; ++y) {
-        for (int x = x0; x <= x1; ++x) {
-          const glm::vec2 p(x + 0.5f, y + 0.5f);
-          // Barycentric weights of the sample centre; outside when any is negative.
-          const auto edge = [&](int a, int b) {
-            return ((at[b].x - at[a].x) * (p.y - at[a].y) - (p.x - at[a].x) * (at[b].y - at[a].y)) /
-                   area;
-          };
-          const glm::vec3 weights(edge(1, 2), edge(2, 0), edge(0, 1));
-          if (weights.x < 0.0f || weights.y < 0.0f || weights.z < 0.0f) continue;
-          const float t = weights.x * height[0] + weights.y * height[1] + weights.z * height[2];
-          const float nearness = fromBack ? -t : t;
-          const size_t s = size_t(y) * sw + x;
-          if (nearness <= depth[s]) continue;
-          depth[s] = nearness;
-          color[s] = wood->sample(triangle, weights, std::max(stepU, stepV));
-        }
-      }
-    }
+    OrthographicSamples samples{sw, sh, depth, color};
+    rasterizeWoodOrthographic(tree, *wood, woodTriangles, billboard, fromBack, samples);
   }
   ImageRgba8 image(width, height);
   for (int y = 0; y < height; ++y) {

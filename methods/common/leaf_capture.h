@@ -60,6 +60,23 @@ class WoodColorSampler {
   std::vector<LinearMipPyramid> mPyramids;
 };
 
+// An orthographic capture's samples over a billboard rectangle, row-major, `width` × `height`:
+// each sample's nearness to the camera (height along the camera's side of the normal; −infinity
+// where nothing was seen) and linear colour; `wood`, when set, marks the samples wood won.
+struct OrthographicSamples {
+  int width = 0, height = 0;
+  std::vector<float>& nearness;
+  std::vector<glm::vec3>& color;
+  std::vector<bool>* wood = nullptr;
+};
+
+// Draws the wood triangles `triangles` (opaque, their albedo) into `samples` of `billboard`'s
+// rectangle seen from its +normal side (−normal when `fromBack`), keeping the nearer of what the
+// samples hold and the wood.
+void rasterizeWoodOrthographic(const Tree& tree, const WoodColorSampler& wood,
+                               const std::vector<uint32_t>& triangles, const Billboard& billboard,
+                               bool fromBack, OrthographicSamples& samples);
+
 // Writes a texel from `samples` samples of which `covered` hit a leaf, `linearSum` their summed
 // linear colour: RGB the sRGB-encoded mean (left as is when nothing is covered), alpha the
 // coverage.

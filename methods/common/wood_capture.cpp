@@ -1,5 +1,6 @@
 #include "methods/common/wood_capture.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -44,6 +45,44 @@ std::vector<std::vector<uint32_t>> assignWoodToBillboards(const WoodMesh& wood,
     if (best < billboards.size()) assigned[best].push_back(triangle);
   }
   return assigned;
+}
+
+WoodInImages captureWoodInImages(const Tree& tree, const std::vector<BillboardCloud>& clouds,
+                                 size_t firstImageCloud, const std::vector<float>& largestPixels,
+                                 float capturePixels) {
+  WoodInImages result;
+  size_t total = 0;
+  for (const BillboardCloud& cloud : clouds) total += cloud.billboards.size();
+  result.perBillboard.resize(total);
+  result.report = {{"triangles", 0}};
+  if (capturePixels <= 0.0f || clouds.size() <= firstImageCloud) return result;
+  const float radius = 0.5f * glm::length(tree.bounds.extent());
+  std::vector<std::vector<std::vector<uint32_t>>> assigned;
+  nlohmann::json bounds = nlohmann::json::array();
+  result.captured.assign(tree.wood.triangleCount(), true);
+  for (size_t c = firstImageCloud; c < clouds.size(); ++c) {
+    const float maxDistance = capturePixels * radius / largestPixels.at(c - firstImageCloud);
+    bounds.push_back(maxDistance);
+    assigned.push_back(assignWoodToBillboards(tree.wood, clouds[c].billboards, maxDistance));
+    std::vector<bool> inCloud(tree.wood.triangleCount(), false);
+    for (const auto& triangles : assigned.back())
+      for (uint32_t t : triangles) inCloud[t] = true;
+    for (size_t t = 0; t < inCloud.size(); ++t)
+      result.captured[t] = result.captured[t] && inCloud[t];
+  }
+  size_t first = 0;
+  for (size_t c = 0; c < firstImageCloud; ++c) first += clouds[c].billboards.size();
+  for (const auto& cloud : assigned) {
+    for (const auto& triangles : cloud) {
+      for (uint32_t t : triangles)
+        if (result.captured[t]) result.perBillboard[first].push_back(t);
+      ++first;
+    }
+  }
+  const auto count = size_t(std::count(result.captured.begin(), result.captured.end(), true));
+  result.report = {
+      {"triangles", count}, {"max_plane_distance", bounds}, {"below_px", largestPixels.front()}};
+  return result;
 }
 
 }  // namespace canopy

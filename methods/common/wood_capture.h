@@ -3,6 +3,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "common/tree.h"
 #include "methods/common/billboard_cloud.h"
 
@@ -17,5 +19,19 @@ namespace canopy {
 std::vector<std::vector<uint32_t>> assignWoodToBillboards(const WoodMesh& wood,
                                                           const std::vector<Billboard>& billboards,
                                                           float maxDistance);
+
+// The wood a cloud family's images hold. Clouds from `firstImageCloud` on are drawn as images
+// only; cloud c at most at `largestPixels[c - firstImageCloud]` output pixels of projected
+// radius, so it may flatten wood by `capturePixels` × radius / largest world units. A triangle
+// is captured when every image cloud holds it within its bound (assignWoodToBillboards): the
+// images then hold exactly the wood that trees drawn with them do not draw as geometry.
+struct WoodInImages {
+  std::vector<bool> captured;                       // per wood triangle; empty: none
+  std::vector<std::vector<uint32_t>> perBillboard;  // over every cloud's billboards in order
+  nlohmann::json report;  // triangles captured and each image cloud's plane-distance bound
+};
+WoodInImages captureWoodInImages(const Tree& tree, const std::vector<BillboardCloud>& clouds,
+                                 size_t firstImageCloud, const std::vector<float>& largestPixels,
+                                 float capturePixels);
 
 }  // namespace canopy

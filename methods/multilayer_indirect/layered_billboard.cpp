@@ -147,34 +147,56 @@ std::optional<LayerHit> walkLayers(const LayeredBillboard& layered,
 
 ImageRgba8 captureLayered(const LayeredBillboard& layered,
                           const std::vector<ImageRgba8>& leafLayers, int texelsPerCell,
-                          bool fromFront, ImageRgba8* occlusion) {
+                          bool fromFront, ImageRgba8* occlusion, const LayeredWood* wood) {
   constexpr int kSamples = 4;
   const glm::ivec2 size = layered.cells * texelsPerCell;
+  const int sw = size.x * kSamples, sh = size.y * kSamples;
+  // Every sample first: what the walk hits and at which height, so the wood can hide it.
+  std::vector<float> nearness(size_t(sw) * sh, -std::numeric_limits<float>::infinity());
+  std::vector<glm::vec3> color(nearness.size(), glm::vec3(0.0f));
+  std::vector<float> ambient(nearness.size(), 1.0f);
+  for (int y = 0; y < sh; ++y) {
+    for (int x = 0; x < sw; ++x) {
+      const glm::vec2 unit((x + 0.5f) / sw, (y + 0.5f) / sh);
+      const glm::vec2 point = (unit * 2.0f - 1.0f) * layered.halfExtents;
+      const auto hit = walkLayers(layered, leafLayers, point, fromFront);
+      if (!hit) continue;
+      const LeafRecord& record = layered.records[hit->record];
+      const size_t s = size_t(y) * sw + x;
+      nearness[s] = fromFront ? record.heightAt(hit->st) : -record.heightAt(hit->st);
+      color[s] = glm::vec3(srgbToLinear(hit->color.r), srgbToLinear(hit->color.g),
+                           srgbToLinear(hit->color.b));
+      ambient[s] = interpolateCorners(record.ambient, (hit->st + 1.0f) * 0.5f);
+    }
+  }
+  if (wood) {
+    std::vector<bool> isWood(nearness.size(), false);
+    OrthographicSamples samples{sw, sh, nearness, color, &isWood};
+    rasterizeWoodOrthographic(wood->tree, wood->colors, wood->triangles, wood->billboard,
+                              !fromFront, samples);
+    for (size_t s = 0; s < isWood.size(); ++s)
+      if (isWood[s]) ambient[s] = 1.0f;
+  }
   ImageRgba8 image(size.x, size.y);
   if (occlusion) *occlusion = ImageRgba8(size.x, size.y);
   for (int y = 0; y < size.y; ++y) {
     for (int x = 0; x < size.x; ++x) {
       glm::vec3 sum(0.0f);
-      float ambient = 0.0f;
+      float ambientSum = 0.0f;
       int covered = 0;
       for (int sy = 0; sy < kSamples; ++sy) {
         for (int sx = 0; sx < kSamples; ++sx) {
-          const glm::vec2 unit((x + (sx + 0.5f) / kSamples) / size.x,
-                               (y + (sy + 0.5f) / kSamples) / size.y);
-          const glm::vec2 point = (unit * 2.0f - 1.0f) * layered.halfExtents;
-          const auto hit = walkLayers(layered, leafLayers, point, fromFront);
-          if (!hit) continue;
-          sum += glm::vec3(srgbToLinear(hit->color.r), srgbToLinear(hit->color.g),
-                           srgbToLinear(hit->color.b));
-          ambient +=
-              interpolateCorners(layered.records[hit->record].ambient, (hit->st + 1.0f) * 0.5f);
+          const size_t s = size_t(y * kSamples + sy) * sw + (x * kSamples + sx);
+          if (nearness[s] == -std::numeric_limits<float>::infinity()) continue;
+          sum += color[s];
+          ambientSum += ambient[s];
           ++covered;
         }
       }
       writeCoverageTexel(image.at(x, y), sum, covered, kSamples * kSamples);
       if (occlusion) {
         uint8_t* out = occlusion->at(x, y);
-        const float value = covered ? ambient / float(covered) : 1.0f;
+        const float value = covered ? ambientSum / float(covered) : 1.0f;
         out[0] = out[1] = out[2] = uint8_t(std::lround(255.0f * value));
         out[3] = image.at(x, y)[3];
       }

@@ -14,6 +14,8 @@
 
 namespace canopy {
 
+class WoodColorSampler;  // methods/common/leaf_capture.h
+
 // One leaf as its billboard sees it (García et al. 2007 §4.2: "each leaf has an associated
 // vector that represents its position in local billboard coordinates"), in the billboard's frame
 // (axisU, axisV, normal). The paper keeps a position, a scale and an orientation index into leaf
@@ -92,12 +94,23 @@ std::optional<LayerHit> walkLayers(const LayeredBillboard& layered,
                                    const std::vector<ImageRgba8>& leafLayers, glm::vec2 point,
                                    bool fromFront, int budget = -1);
 
+// Wood a low-resolution texture holds (wood_capture_px): the triangles, the billboard's frame
+// with the layered rectangle's half extents, and the wood's colours.
+struct LayeredWood {
+  const Tree& tree;
+  const WoodColorSampler& colors;
+  const std::vector<uint32_t>& triangles;
+  Billboard billboard;
+};
+
 // The low-resolution texture of §5.1: what the full walk shows of the layered billboard from its
 // front (or back) side, `texelsPerCell` texels per hash cell side, 4×4 samples a texel: colour
-// (linear mean, sRGB-encoded) and coverage. `occlusion` (optional) gets the mean ambient
-// occlusion of the leaves hit (1 where nothing is), its alpha the coverage.
+// (linear mean, sRGB-encoded) and coverage. With `wood`, its triangles are seen too, leaves and
+// wood hiding one another by height. `occlusion` (optional) gets the mean ambient occlusion of
+// the leaves hit (1 where nothing or wood is), its alpha the coverage.
 ImageRgba8 captureLayered(const LayeredBillboard& layered,
                           const std::vector<ImageRgba8>& leafLayers, int texelsPerCell,
-                          bool fromFront, ImageRgba8* occlusion = nullptr);
+                          bool fromFront, ImageRgba8* occlusion = nullptr,
+                          const LayeredWood* wood = nullptr);
 
 }  // namespace canopy

@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <cmath>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -15,6 +16,7 @@
 #include "methods/common/lod_instances.h"
 #include "methods/common/mesh.h"
 #include "methods/common/mipmaps.h"
+#include "methods/common/wood_capture.h"
 #include "methods/multilayer_indirect/layered_billboard.h"
 #include "methods/multilayer_indirect/list_textures.h"
 
@@ -44,6 +46,8 @@ struct MultilayerParams {
   std::string listsPrecision = "8bit";
   bool parallax = false;
   float parallaxMaxAngle = 70.0f;
+  float lodLowResPixels = 0.0f;
+  float woodCapturePixels = 0.0f;
   WoodParams wood;
 
   template <class Visitor>
@@ -78,7 +82,16 @@ struct MultilayerParams {
     v("parallax_max_angle", parallaxMaxAngle, 0.0f, 89.0f,
       "parallax: rays up to this angle from the billboard normal find every leaf they cross "
       "(the billboard and its cells grow by the offsets); steeper rays are bent to it");
+    v("lod_lowres_px", lodLowResPixels, 0.0f, 100000.0f,
+      "below this projected radius (output pixels) the middle cloud skips the list walk and "
+      "draws its low-resolution texture only, as the far cloud does; between lod_far_px and "
+      "lod_near_px (0: the walk down to lod_far_px)");
     wood.visit(v);
+    v("wood_capture_px", woodCapturePixels, 0.0f, 100.0f,
+      "the clouds drawn as low-resolution textures only (below lod_lowres_px, or lod_far_px) "
+      "also hold the wood lying (every corner) within this many output pixels of one of their "
+      "billboards, measured at the largest projected size each is drawn at; trees drawn with "
+      "them draw only the rest of the wood as geometry (0: leaves only; needs lod)");
   }
 };
 
@@ -151,13 +164,28 @@ class MultilayerIndirect final : public Method {
  public:
   explicit MultilayerIndirect(MultilayerParams params) : mParams(std::move(params)) {
     mParams.cloud.resolve("multilayer_indirect");
+    const CloudParams& cloud = mParams.cloud;
+    if (mParams.lodLowResPixels > 0.0f &&
+        (!cloud.lod || mParams.lodLowResPixels <= cloud.lodFarPixels ||
+         mParams.lodLowResPixels >= cloud.lodNearPixels))
+      throwInputError(
+          "multilayer_indirect: parameter 'lod_lowres_px' ({}) must lie between 'lod_far_px' ({}) "
+          "and 'lod_near_px' ({}) with 'lod' on, or be 0",
+          mParams.lodLowResPixels, cloud.lodFarPixels, cloud.lodNearPixels);
   }
 
   void bake(const Tree& tree, BakeContext& ctx) override {
     mLevels = {};
     mLevels.treeBounds = tree.bounds;
-    mWood.bake(tree, mParams.wood.levels());
     const auto clouds = buildBillboardCloudFamily(tree, mParams.cloud.levels(), ctx.seed);
+    // The clouds drawn as low-resolution textures only hold the wood their trees do not draw.
+    const std::vector<float> imageLevels = lowResOnlyThresholds();
+    const WoodInImages woodInImages = captureWoodInImages(
+        tree, clouds, clouds.size() - std::min(clouds.size(), imageLevels.size()), imageLevels,
+        mParams.wood.draw && mParams.cloud.lod ? mParams.woodCapturePixels : 0.0f);
+    mWood.bake(tree, mParams.wood.levels(), woodInImages.captured,
+               imageLevels.empty() ? 0.0f : imageLevels.front());
+    const WoodColorSampler woodColors(tree);
     std::vector<const Billboard*> billboards;
     for (const BillboardCloud& cloud : clouds) {
       mLevels.addLevel(billboards.size(), cloud.billboards.size());
@@ -192,11 +220,18 @@ class MultilayerIndirect final : public Method {
         frontOcclusion(billboards.size());
     tbb::parallel_for(size_t(0), billboards.size() * 2, [&](size_t k) {
       const size_t i = k % billboards.size();
+      std::optional<LayeredWood> wood;
+      if (!woodInImages.perBillboard[i].empty()) {
+        wood.emplace(LayeredWood{tree, woodColors, woodInImages.perBillboard[i], *billboards[i]});
+        wood->billboard.halfExtents = layered[i].halfExtents;
+      }
+      const LayeredWood* woodInImage = wood ? &*wood : nullptr;
       if (k < billboards.size()) {
         fronts[i] = captureLayered(layered[i], mLeafLayers, mParams.lowResTexelsPerCell, true,
-                                   &frontOcclusion[i]);
+                                   &frontOcclusion[i], woodInImage);
       } else {
-        backs[i] = captureLayered(layered[i], mLeafLayers, mParams.lowResTexelsPerCell, false);
+        backs[i] = captureLayered(layered[i], mLeafLayers, mParams.lowResTexelsPerCell, false,
+                                  nullptr, woodInImage);
       }
     });
     const ImageAtlas atlas = composeAtlas(fronts, kLowResPadding, kLowResAlignment);
@@ -223,7 +258,9 @@ class MultilayerIndirect final : public Method {
                {"dropped_entries", mLists.droppedEntries},
                {"leaf_images", leafImages.count()},
                {"lowres_atlas", {atlas.layout.width, atlas.layout.height}},
-               {"parallax_margin", parallaxMargin(billboards, layered, withLists)}};
+               {"parallax_margin", parallaxMargin(billboards, layered, withLists)},
+               {"wood_captured", woodInImages.report}};
+    setDrawLevels();
   }
 
   void upload(gl::Device& device) override {
@@ -294,12 +331,12 @@ class MultilayerIndirect final : public Method {
 
   void draw(const FrameContext& frame, std::span<const Instance> instances) override {
     if (instances.empty()) return;
-    mLod.update(frame, instances, mLevels.treeBounds, mParams.cloud.thresholds());
+    mLod.update(frame, instances, mLevels.treeBounds, drawThresholds());
     const gl::Api& g = gl::api();
     g.BindVertexArray(mVao.id());
     g.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, mBillboardBuffer.id());
     const glm::vec2 lowResAtlasSize(mLowRes[0].width, mLowRes[0].height);
-    mLevels.draw(
+    mDrawLevels.draw(
         mLod,
         [&](size_t level) {
           const bool far = level >= kFarLevel;
@@ -404,12 +441,35 @@ class MultilayerIndirect final : public Method {
     }
     validateLoaded(folder);
     mLevels.load(asset, mBillboards.size() * 6);
+    setDrawLevels();
     mWood.load(asset);
     asset.finishReading();
   }
 
  private:
   bool packed() const { return mParams.listsPrecision == "8bit"; }
+  bool middleLowRes() const { return mParams.lodLowResPixels > 0.0f; }
+
+  // The instance LoD thresholds (output pixels): the clouds' own, with lod_lowres_px between.
+  std::vector<float> drawThresholds() const {
+    std::vector<float> thresholds = mParams.cloud.thresholds();
+    if (middleLowRes()) thresholds.insert(thresholds.begin() + 1, mParams.lodLowResPixels);
+    return thresholds;
+  }
+  // The largest projected radii the clouds drawn as low-resolution textures only are drawn at,
+  // finest first: the middle cloud below lod_lowres_px (when set), the far one below lod_far_px.
+  std::vector<float> lowResOnlyThresholds() const {
+    if (!mParams.cloud.lod) return {};
+    if (middleLowRes()) return {mParams.lodLowResPixels, mParams.cloud.lodFarPixels};
+    return {mParams.cloud.lodFarPixels};
+  }
+  // Levels from kFarLevel on draw the low-resolution texture only: with lod_lowres_px the middle
+  // cloud's range is drawn a second time there, before the far cloud's.
+  void setDrawLevels() {
+    mDrawLevels = mLevels;
+    if (middleLowRes() && mLevels.ranges.size() > kFarLevel)
+      mDrawLevels.ranges.insert(mDrawLevels.ranges.begin() + kFarLevel, mLevels.ranges[1]);
+  }
 
   // The largest growth of a layered billboard's rectangle for parallax (0 without), in units of
   // the billboards' mean half extent, for the report.
@@ -536,7 +596,8 @@ class MultilayerIndirect final : public Method {
 
   MultilayerParams mParams;
   nlohmann::json mReport;
-  CloudLevels mLevels;
+  CloudLevels mLevels;      // as baked: the near, middle and far clouds
+  CloudLevels mDrawLevels;  // as drawn: the middle cloud twice with lod_lowres_px (setDrawLevels)
   std::vector<BillboardRecord> mBillboards;
   ListTextures mLists;
   std::vector<ImageRgba8> mLeafLayers;  // leaf image i: front 2i, back 2i + 1

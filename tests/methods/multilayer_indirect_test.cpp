@@ -162,6 +162,72 @@ TEST(LayeredBillboard, WalkFromEitherSideReturnsTheLeafNearestThatSide) {
   EXPECT_FALSE(walkLayers(layered, images.layers, {0.18f, 0.18f}, true));
 }
 
+// Wood in the low-resolution texture (wood_capture_px): a red triangle spanning the rectangle
+// shows wherever no leaf lies nearer the capturing side, and hides the leaves it lies in front of.
+TEST(LayeredBillboard, CapturedWoodAndLeavesHideOneAnotherByHeight) {
+  Tree tree = test::smallTree(50);
+  Leaf front = tree.leaves[0];
+  front.center = {0, 0, 0.1f};
+  front.normal = {0, 0, 1};
+  front.axisU = {1, 0, 0};
+  front.axisV = {0, 1, 0};
+  front.halfExtents = {0.05f, 0.1f};
+  Leaf back = front;
+  back.center = {0, 0, -0.1f};
+  tree.leaves = {front, back};
+  tree.woodMaterials = {WoodMaterial{"red", {1.0f, 0.0f, 0.0f, 1.0f}, -1}};
+  Billboard billboard;
+  billboard.normal = {0, 0, 1};
+  billboard.axisU = {1, 0, 0};
+  billboard.axisV = {0, 1, 0};
+  billboard.halfExtents = {0.2f, 0.2f};
+  billboard.leaves = {1, 0};
+  LayeringParams params;
+  params.cellSize = 0.1f;  // 4 × 4 cells, 16 × 16 texels at 4 a cell
+  const LeafImageSampler sampler(tree);
+  const LeafImages images = buildLeafImages(tree, sampler, 32, 16);
+  const LayeredBillboard layered =
+      buildLayeredBillboard(tree, billboard, images.imageOfLeaf, params);
+  const auto capture = [&](float woodHeight, bool fromFront) {
+    tree.wood = {};
+    tree.wood.positions = {{-1, -1, woodHeight}, {3, -1, woodHeight}, {-1, 3, woodHeight}};
+    tree.wood.normals.assign(3, {0, 0, 1});
+    tree.wood.uvs.assign(3, {0, 0});
+    tree.wood.indices = {0, 1, 2};
+    tree.wood.materialIds = {0};
+    const WoodColorSampler colors(tree);
+    const std::vector<uint32_t> triangles = {0};
+    const LayeredWood wood{tree, colors, triangles, billboard};
+    return captureLayered(layered, images.layers, 4, fromFront, nullptr, &wood);
+  };
+  for (const bool fromFront : {true, false}) {
+    const ImageRgba8 leaves = captureLayered(layered, images.layers, 4, fromFront);
+    const ImageRgba8 between = capture(0.0f, fromFront);
+    const ImageRgba8 over = capture(fromFront ? 0.2f : -0.2f, fromFront);
+    int leafTexels = 0, woodTexels = 0;
+    for (int y = 0; y < leaves.height; ++y) {
+      for (int x = 0; x < leaves.width; ++x) {
+        const uint8_t* red = over.at(x, y);
+        EXPECT_EQ(std::vector<int>(red, red + 4), (std::vector<int>{255, 0, 0, 255}))
+            << "wood over the leaves hides them at " << x << ", " << y;
+        const uint8_t* leaf = leaves.at(x, y);
+        const uint8_t* mixed = between.at(x, y);
+        EXPECT_EQ(mixed[3], 255) << "the wood fills the rest";
+        if (leaf[3] == 255) {
+          ++leafTexels;
+          EXPECT_EQ(std::vector<int>(mixed, mixed + 3), std::vector<int>(leaf, leaf + 3))
+              << "the nearer leaf shows at " << x << ", " << y;
+        } else if (leaf[3] == 0) {
+          ++woodTexels;
+          EXPECT_EQ(std::vector<int>(mixed, mixed + 3), (std::vector<int>{255, 0, 0}));
+        }
+      }
+    }
+    EXPECT_GT(leafTexels, 4);
+    EXPECT_GT(woodTexels, 100);
+  }
+}
+
 // Renders `method` and the reference for a tree, camera along the billboard normal.
 struct TwoRenders {
   ImageRgba8 reference, method;
@@ -504,7 +570,9 @@ TEST(MultilayerIndirect, BadParametersNameTheParameter) {
                                                                 {"max_layers", 256},
                                                                 {"parallax_max_angle", 90.0},
                                                                 {"lod_factor", -1.0},
-                                                                {"parallax", "yes"}});
+                                                                {"parallax", "yes"},
+                                                                {"lod_lowres_px", 20.0},
+                                                                {"lod_lowres_px", 200.0}});
 }
 
 }  // namespace

@@ -277,31 +277,46 @@ TEST_F(WoodInImpostors, FarTreesDrawCoarseWoodAndNearViewsTheFullMesh) {
   EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
 }
 
-// Wood captured into the middle and far clouds' images (wood_capture_px): a tree drawn with those
-// clouds draws only the residual wood, keeps its coverage (the images hold the rest), and a
-// near tree, drawn with the finest cloud, still draws the full chain.
-TEST_F(WoodInImpostors, CapturedWoodIsInTheImagesNotTheGeometry) {
+// Wood captured into the images of the clouds drawn as images only (wood_capture_px): the
+// classic cloud's middle and far clouds, the multi-layer far cloud's low-resolution texture. A
+// tree drawn with those clouds draws only the residual wood, keeps its coverage (the images hold
+// the rest), and a near tree, drawn with the finest cloud, still draws the full chain.
+class CapturedWood : public WoodInImpostors, public testing::WithParamInterface<const char*> {};
+
+TEST_P(CapturedWood, IsInTheImagesNotTheGeometry) {
+  const std::string method = GetParam();
+  // Multi-layer: a far cloud of 6 planes and 2 texels a hash cell, so that this 400-leaf tree's
+  // billboards span the branches and their texels resolve them (its default, 100 planes of
+  // 4 leaves at 1 texel a cell, is sized for trees of thousands of leaves).
+  const nlohmann::json base = method == "multilayer_indirect"
+                                  ? nlohmann::json{{"clusters", 60}, {"lowres_texels_per_cell", 2}}
+                                  : nlohmann::json::object();
+  const auto with = [&](const char* key, const nlohmann::json& value) {
+    nlohmann::json params = base;
+    params[key] = value;
+    return params;
+  };
   auto reference = test::bakeAndUpload(device, tree, "polygonal", nlohmann::json::object());
-  auto plain = test::bakeAndUpload(device, tree, "billboard_cloud", {{"wood_capture_px", 0.0}},
+  auto plain = test::bakeAndUpload(device, tree, method, with("wood_capture_px", 0.0),
                                    Shading::kUnlit, "plain");
-  auto captured = test::bakeAndUpload(device, tree, "billboard_cloud", {{"wood_capture_px", 8.0}},
+  auto captured = test::bakeAndUpload(device, tree, method, with("wood_capture_px", 8.0),
                                       Shading::kUnlit, "captured");
   const nlohmann::json report = captured->bakeReport();
   const auto capturedTriangles = report.at("wood_captured").at("triangles").get<size_t>();
   EXPECT_GT(capturedTriangles, tree.wood.triangleCount() / 4) << report.dump();
   EXPECT_EQ(plain->bakeReport().at("wood_captured").at("triangles").get<size_t>(), 0u);
-  const auto draw = [&](Method& method, float distance) {
-    DrawnStats drawn;
+  const auto draw = [&](Method& drawn, float distance) {
+    DrawnStats stats;
     const Camera camera = orbitCamera(tree.bounds, {distance, 10.0f, 0.0f}, 40.0f);
-    const ImageRgbaF image = harness.renderLinearAt(method, camera, 128, 128, &drawn);
-    return std::make_pair(drawn, compositeToSrgb8(image, glm::vec3(0.5f)));
+    const ImageRgbaF image = harness.renderLinearAt(drawn, camera, 128, 128, &stats);
+    return std::make_pair(stats, compositeToSrgb8(image, glm::vec3(0.5f)));
   };
   // 8 radii: about 22 px of radius, the far cloud.
   const auto [referenceDrawn, referenceImage] = draw(*reference, 8.0f);
   const auto [plainDrawn, plainImage] = draw(*plain, 8.0f);
   const auto [capturedDrawn, capturedImage] = draw(*captured, 8.0f);
-  // Measured: 858 against 1652 primitives (residual wood level 2, 806 triangles, against the full
-  // chain's 1600).
+  // Measured (classic cloud): 858 against 1652 primitives (residual wood level 2, 806
+  // triangles, against the full chain's 1600).
   EXPECT_LT(capturedDrawn.counts.primitives * 3, plainDrawn.counts.primitives * 2);
   const size_t residualFrom = size_t(
       std::count_if(report.at("wood_levels").begin(), report.at("wood_levels").end(),
@@ -312,17 +327,62 @@ TEST_F(WoodInImpostors, CapturedWoodIsInTheImagesNotTheGeometry) {
   // Coverage: the images hold the wood the geometry no longer draws. Measured on this small
   // tree's 26-plane far cloud: coverage error 0.197 drawing all wood, 0.235 with the wood
   // captured at 8 px (flattened onto the planes), 0.490 without any wood; the bounds sit between.
-  auto woodless = test::bakeAndUpload(device, tree, "billboard_cloud", {{"wood", false}},
-                                      Shading::kUnlit, "woodless");
-  const double plainError = compareImages(referenceImage, plainImage).coverageError;
-  const double capturedError = compareImages(referenceImage, capturedImage).coverageError;
-  const double woodlessError =
-      compareImages(referenceImage, draw(*woodless, 8.0f).second).coverageError;
-  EXPECT_LT(capturedError, plainError + 0.06) << plainError;
-  EXPECT_LT(capturedError, 0.5 * (plainError + woodlessError)) << woodlessError;
+  // Not asserted for multi-layer: its low-resolution texels (one or two a hash cell) are too
+  // coarse for this tree's thin branches, which they thicken (0.321 against 0.196 without wood,
+  // 0.256 drawing it; docs/METHODS.md, "multi-layer speed"); the capture itself is checked by
+  // LayeredBillboard.CapturedWoodAndLeavesHideOneAnotherByHeight.
+  if (method == "billboard_cloud") {
+    auto woodless =
+        test::bakeAndUpload(device, tree, method, with("wood", false), Shading::kUnlit, "woodless");
+    const double plainError = compareImages(referenceImage, plainImage).coverageError;
+    const double capturedError = compareImages(referenceImage, capturedImage).coverageError;
+    const double woodlessError =
+        compareImages(referenceImage, draw(*woodless, 8.0f).second).coverageError;
+    EXPECT_LT(capturedError, plainError + 0.06) << plainError;
+    EXPECT_LT(capturedError, 0.5 * (plainError + woodlessError)) << woodlessError;
+  }
   // 1.2 radii: the finest cloud, which holds no wood, with the full chain.
   const auto [nearDrawn, nearImage] = draw(*captured, 1.2f);
   EXPECT_EQ(nearDrawn.woodInstancesPerLevel.at(0), 1u);
+  EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
+}
+
+INSTANTIATE_TEST_SUITE_P(ImageClouds, CapturedWood,
+                         testing::Values("billboard_cloud", "multilayer_indirect"));
+
+// lod_lowres_px: between it and lod_far_px the multi-layer middle cloud is drawn without its
+// list walk, as its low-resolution texture (the same billboards, another image); above it, and
+// for the far cloud below lod_far_px, nothing changes.
+TEST_F(WoodInImpostors, MultilayerMiddleCloudDrawsItsLowResolutionTextureBelowLodLowresPx) {
+  // Planes and texels sized for this 400-leaf tree, as in CapturedWood.
+  const nlohmann::json base = {{"wood", false}, {"clusters", 60}, {"lowres_texels_per_cell", 2}};
+  nlohmann::json lowRes = base;
+  lowRes["lod_lowres_px"] = 90.0;
+  auto reference = test::bakeAndUpload(device, tree, "polygonal", {{"wood", false}});
+  auto walked =
+      test::bakeAndUpload(device, tree, "multilayer_indirect", base, Shading::kUnlit, "walked");
+  auto textured =
+      test::bakeAndUpload(device, tree, "multilayer_indirect", lowRes, Shading::kUnlit, "textured");
+  const auto draw = [&](Method& method, float distance) {
+    DrawnStats stats;
+    const Camera camera = orbitCamera(tree.bounds, {distance, 10.0f, 0.0f}, 40.0f);
+    const ImageRgbaF image = harness.renderLinearAt(method, camera, 128, 128, &stats);
+    return std::make_pair(stats, compositeToSrgb8(image, glm::vec3(0.5f)));
+  };
+  // 3 radii: about 59 px of radius, between lod_far_px (35) and lod_lowres_px.
+  const auto [walkedDrawn, walkedImage] = draw(*walked, 3.0f);
+  const auto [texturedDrawn, texturedImage] = draw(*textured, 3.0f);
+  EXPECT_EQ(texturedDrawn.counts.primitives, walkedDrawn.counts.primitives) << "the same cloud";
+  EXPECT_NE(texturedImage.pixels, walkedImage.pixels) << "another image";
+  // The texture holds what the full walk shows, at two texels per hash cell: coverage within
+  // 0.08 of the walk's (measured 0.372 against 0.315 on this sparse tree; an empty or misplaced
+  // texture loses most of the crown).
+  const ImageRgba8 referenceImage = draw(*reference, 3.0f).second;
+  EXPECT_LT(compareImages(referenceImage, texturedImage).coverageError,
+            compareImages(referenceImage, walkedImage).coverageError + 0.08);
+  for (const float distance : {1.2f, 8.0f})  // the near cloud, the far cloud
+    EXPECT_EQ(draw(*textured, distance).second.pixels, draw(*walked, distance).second.pixels)
+        << distance << " radii";
   EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
 }
 
