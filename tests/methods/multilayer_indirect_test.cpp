@@ -127,30 +127,40 @@ TEST(LeafRecord, LocatesTheLeafPointEveryRayCrosses) {
   EXPECT_GT(checked, 80);
 }
 
-TEST(LayeredBillboard, WalkFromEitherSideReturnsTheLeafNearestThatSide) {
-  // Two leaves stacked along the billboard normal, same position and orientation.
+// Two leaves stacked along the normal of a 0.4 × 0.4 billboard (same position and orientation,
+// 0.2 apart), layered in 4 × 4 cells.
+struct StackedLeaves {
   Tree tree = test::smallTree(50);
-  Leaf front = tree.leaves[0];
-  front.center = {0, 0, 0.1f};
-  front.normal = {0, 0, 1};
-  front.axisU = {1, 0, 0};
-  front.axisV = {0, 1, 0};
-  front.halfExtents = {0.05f, 0.1f};
-  Leaf back = front;
-  back.center = {0, 0, -0.1f};
-  tree.leaves = {front, back};
   Billboard billboard;
-  billboard.normal = {0, 0, 1};
-  billboard.axisU = {1, 0, 0};
-  billboard.axisV = {0, 1, 0};
-  billboard.halfExtents = {0.2f, 0.2f};
-  billboard.leaves = {1, 0};
-  LayeringParams params;
-  params.cellSize = 0.1f;  // 4 × 4 cells
-  const LeafImageSampler sampler(tree);
-  const LeafImages images = buildLeafImages(tree, sampler, 32, 16);
-  const LayeredBillboard layered =
-      buildLayeredBillboard(tree, billboard, images.imageOfLeaf, params);
+  LeafImages images;
+  LayeredBillboard layered;
+  StackedLeaves() {
+    Leaf front = tree.leaves[0];
+    front.center = {0, 0, 0.1f};
+    front.normal = {0, 0, 1};
+    front.axisU = {1, 0, 0};
+    front.axisV = {0, 1, 0};
+    front.halfExtents = {0.05f, 0.1f};
+    Leaf back = front;
+    back.center = {0, 0, -0.1f};
+    tree.leaves = {front, back};
+    billboard.normal = {0, 0, 1};
+    billboard.axisU = {1, 0, 0};
+    billboard.axisV = {0, 1, 0};
+    billboard.halfExtents = {0.2f, 0.2f};
+    billboard.leaves = {1, 0};
+    LayeringParams params;
+    params.cellSize = 0.1f;
+    const LeafImageSampler sampler(tree);
+    images = buildLeafImages(tree, sampler, 32, 16);
+    layered = buildLayeredBillboard(tree, billboard, images.imageOfLeaf, params);
+  }
+};
+
+TEST(LayeredBillboard, WalkFromEitherSideReturnsTheLeafNearestThatSide) {
+  const StackedLeaves stacked;
+  const LayeredBillboard& layered = stacked.layered;
+  const LeafImages& images = stacked.images;
   const auto fromFront = walkLayers(layered, images.layers, {0.0f, 0.0f}, true);
   const auto fromBack = walkLayers(layered, images.layers, {0.0f, 0.0f}, false);
   ASSERT_TRUE(fromFront && fromBack);
@@ -165,29 +175,12 @@ TEST(LayeredBillboard, WalkFromEitherSideReturnsTheLeafNearestThatSide) {
 // Wood in the low-resolution texture (wood_capture_px): a red triangle spanning the rectangle
 // shows wherever no leaf lies nearer the capturing side, and hides the leaves it lies in front of.
 TEST(LayeredBillboard, CapturedWoodAndLeavesHideOneAnotherByHeight) {
-  Tree tree = test::smallTree(50);
-  Leaf front = tree.leaves[0];
-  front.center = {0, 0, 0.1f};
-  front.normal = {0, 0, 1};
-  front.axisU = {1, 0, 0};
-  front.axisV = {0, 1, 0};
-  front.halfExtents = {0.05f, 0.1f};
-  Leaf back = front;
-  back.center = {0, 0, -0.1f};
-  tree.leaves = {front, back};
+  StackedLeaves stacked;  // 4 × 4 cells, 16 × 16 texels at 4 a cell
+  Tree& tree = stacked.tree;
+  const LayeredBillboard& layered = stacked.layered;
+  const LeafImages& images = stacked.images;
+  const Billboard& billboard = stacked.billboard;
   tree.woodMaterials = {WoodMaterial{"red", {1.0f, 0.0f, 0.0f, 1.0f}, -1}};
-  Billboard billboard;
-  billboard.normal = {0, 0, 1};
-  billboard.axisU = {1, 0, 0};
-  billboard.axisV = {0, 1, 0};
-  billboard.halfExtents = {0.2f, 0.2f};
-  billboard.leaves = {1, 0};
-  LayeringParams params;
-  params.cellSize = 0.1f;  // 4 × 4 cells, 16 × 16 texels at 4 a cell
-  const LeafImageSampler sampler(tree);
-  const LeafImages images = buildLeafImages(tree, sampler, 32, 16);
-  const LayeredBillboard layered =
-      buildLayeredBillboard(tree, billboard, images.imageOfLeaf, params);
   const auto capture = [&](float woodHeight, bool fromFront) {
     tree.wood = {};
     tree.wood.positions = {{-1, -1, woodHeight}, {3, -1, woodHeight}, {-1, 3, woodHeight}};

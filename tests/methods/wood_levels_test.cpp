@@ -233,6 +233,13 @@ namespace {
 class WoodInImpostors : public testing::Test {
  protected:
   WoodInImpostors() { harness.setTree(tree.bounds, tree.leaves.size()); }
+  // Draws `method` from `distance` bounding radii (elevation 10°) at 128², composited over grey.
+  std::pair<DrawnStats, ImageRgba8> drawAt(Method& method, float distance) {
+    DrawnStats stats;
+    const Camera camera = orbitCamera(tree.bounds, {distance, 10.0f, 0.0f}, 40.0f);
+    const ImageRgbaF image = harness.renderLinearAt(method, camera, 128, 128, &stats);
+    return {stats, compositeToSrgb8(image, glm::vec3(0.5f))};
+  }
   static RenderSettings settings128() {
     RenderSettings settings;
     settings.width = settings.height = 128;
@@ -305,16 +312,10 @@ TEST_P(CapturedWood, IsInTheImagesNotTheGeometry) {
   const auto capturedTriangles = report.at("wood_captured").at("triangles").get<size_t>();
   EXPECT_GT(capturedTriangles, tree.wood.triangleCount() / 4) << report.dump();
   EXPECT_EQ(plain->bakeReport().at("wood_captured").at("triangles").get<size_t>(), 0u);
-  const auto draw = [&](Method& drawn, float distance) {
-    DrawnStats stats;
-    const Camera camera = orbitCamera(tree.bounds, {distance, 10.0f, 0.0f}, 40.0f);
-    const ImageRgbaF image = harness.renderLinearAt(drawn, camera, 128, 128, &stats);
-    return std::make_pair(stats, compositeToSrgb8(image, glm::vec3(0.5f)));
-  };
   // 8 radii: about 22 px of radius, the far cloud.
-  const auto [referenceDrawn, referenceImage] = draw(*reference, 8.0f);
-  const auto [plainDrawn, plainImage] = draw(*plain, 8.0f);
-  const auto [capturedDrawn, capturedImage] = draw(*captured, 8.0f);
+  const auto [referenceDrawn, referenceImage] = drawAt(*reference, 8.0f);
+  const auto [plainDrawn, plainImage] = drawAt(*plain, 8.0f);
+  const auto [capturedDrawn, capturedImage] = drawAt(*captured, 8.0f);
   // Measured (classic cloud): 858 against 1652 primitives (residual wood level 2, 806
   // triangles, against the full chain's 1600).
   EXPECT_LT(capturedDrawn.counts.primitives * 3, plainDrawn.counts.primitives * 2);
@@ -337,12 +338,12 @@ TEST_P(CapturedWood, IsInTheImagesNotTheGeometry) {
     const double plainError = compareImages(referenceImage, plainImage).coverageError;
     const double capturedError = compareImages(referenceImage, capturedImage).coverageError;
     const double woodlessError =
-        compareImages(referenceImage, draw(*woodless, 8.0f).second).coverageError;
+        compareImages(referenceImage, drawAt(*woodless, 8.0f).second).coverageError;
     EXPECT_LT(capturedError, plainError + 0.06) << plainError;
     EXPECT_LT(capturedError, 0.5 * (plainError + woodlessError)) << woodlessError;
   }
   // 1.2 radii: the finest cloud, which holds no wood, with the full chain.
-  const auto [nearDrawn, nearImage] = draw(*captured, 1.2f);
+  const auto [nearDrawn, nearImage] = drawAt(*captured, 1.2f);
   EXPECT_EQ(nearDrawn.woodInstancesPerLevel.at(0), 1u);
   EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
 }
@@ -363,25 +364,19 @@ TEST_F(WoodInImpostors, MultilayerMiddleCloudDrawsItsLowResolutionTextureBelowLo
       test::bakeAndUpload(device, tree, "multilayer_indirect", base, Shading::kUnlit, "walked");
   auto textured =
       test::bakeAndUpload(device, tree, "multilayer_indirect", lowRes, Shading::kUnlit, "textured");
-  const auto draw = [&](Method& method, float distance) {
-    DrawnStats stats;
-    const Camera camera = orbitCamera(tree.bounds, {distance, 10.0f, 0.0f}, 40.0f);
-    const ImageRgbaF image = harness.renderLinearAt(method, camera, 128, 128, &stats);
-    return std::make_pair(stats, compositeToSrgb8(image, glm::vec3(0.5f)));
-  };
   // 3 radii: about 59 px of radius, between lod_far_px (35) and lod_lowres_px.
-  const auto [walkedDrawn, walkedImage] = draw(*walked, 3.0f);
-  const auto [texturedDrawn, texturedImage] = draw(*textured, 3.0f);
+  const auto [walkedDrawn, walkedImage] = drawAt(*walked, 3.0f);
+  const auto [texturedDrawn, texturedImage] = drawAt(*textured, 3.0f);
   EXPECT_EQ(texturedDrawn.counts.primitives, walkedDrawn.counts.primitives) << "the same cloud";
   EXPECT_NE(texturedImage.pixels, walkedImage.pixels) << "another image";
   // The texture holds what the full walk shows, at two texels per hash cell: coverage within
   // 0.08 of the walk's (measured 0.372 against 0.315 on this sparse tree; an empty or misplaced
   // texture loses most of the crown).
-  const ImageRgba8 referenceImage = draw(*reference, 3.0f).second;
+  const ImageRgba8 referenceImage = drawAt(*reference, 3.0f).second;
   EXPECT_LT(compareImages(referenceImage, texturedImage).coverageError,
             compareImages(referenceImage, walkedImage).coverageError + 0.08);
   for (const float distance : {1.2f, 8.0f})  // the near cloud, the far cloud
-    EXPECT_EQ(draw(*textured, distance).second.pixels, draw(*walked, distance).second.pixels)
+    EXPECT_EQ(drawAt(*textured, distance).second.pixels, drawAt(*walked, distance).second.pixels)
         << distance << " radii";
   EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
 }
