@@ -300,6 +300,11 @@ class BboxHierarchy final : public Method {
 
   void draw(const FrameContext& frame, std::span<const Instance> instances) override {
     if (instances.empty()) return;
+    mWood.drawAround(mParams.wood, frame, instances, [&] { drawLeaves(frame, instances); });
+  }
+
+  // Everything but the wood (drawAround orders the two).
+  void drawLeaves(const FrameContext& frame, std::span<const Instance> instances) {
     // A box switches to its images where one of its texels spans lod_bias output pixels: its LoD
     // distance is its world size per texel times the output focal length (in pixels) / lod_bias.
     std::vector<float> lodDistance(mHierarchy.nodes.size());
@@ -373,7 +378,6 @@ class BboxHierarchy final : public Method {
           leafRanges[n].second);
     }
     g.BindVertexArray(0);
-    if (mParams.wood.draw) mWood.draw(frame, instances, mParams.wood.errorPixels);
   }
 
   uint64_t lodSignature() const override { return fnv1aMix(mSignature, mWood.lodSignature()); }

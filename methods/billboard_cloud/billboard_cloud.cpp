@@ -147,6 +147,11 @@ class BillboardCloudMethod final : public Method {
 
   void draw(const FrameContext& frame, std::span<const Instance> instances) override {
     if (instances.empty()) return;
+    mWood.drawAround(mParams.wood, frame, instances, [&] { drawLeaves(frame, instances); });
+  }
+
+  // Everything but the wood (drawAround orders the two).
+  void drawLeaves(const FrameContext& frame, std::span<const Instance> instances) {
     mLod.update(frame, instances, mLevels.treeBounds, mParams.cloud.thresholds());
     const gl::Api& g = gl::api();
     mProgram.use();
@@ -163,7 +168,6 @@ class BillboardCloudMethod final : public Method {
     g.BindVertexArray(mVao.id());
     mLevels.draw(mLod, {});
     g.BindVertexArray(0);
-    if (mParams.wood.draw) mWood.draw(frame, instances, mParams.wood.errorPixels);
   }
 
   uint64_t lodSignature() const override {

@@ -135,6 +135,14 @@ void WoodRenderer::drawLevel(size_t level, GLuint instanceBuffer, GLint first,
   }
 }
 
+void WoodRenderer::drawAround(const WoodParams& params, const FrameContext& frame,
+                              std::span<const Instance> instances,
+                              const std::function<void()>& drawLeaves) {
+  if (params.draw && params.first) draw(frame, instances, params.errorPixels);
+  drawLeaves();
+  if (params.draw && !params.first) draw(frame, instances, params.errorPixels);
+}
+
 void WoodRenderer::draw(const FrameContext& frame, std::span<const Instance> instances,
                         float errorPixels) {
   mLodUsed = false;

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <functional>
 #include <span>
 #include <string>
 #include <vector>
@@ -29,9 +30,15 @@ gl::VertexArray makeMeshVertexArray(const gl::Buffer& vertices, const gl::Buffer
 void setFrameUniforms(const gl::Program& program, const FrameContext& frame);
 
 // The wood parameters every impostor shares; the reference (polygonal) always draws the full mesh.
+// The help of every method's `wood_first` parameter (the reference's too).
+inline constexpr const char* kWoodFirstHelp =
+    "draw the opaque wood before the leaves, so the depth test rejects the leaf fragments it "
+    "hides before their shaders run (false: after the leaves; the same image either way)";
+
 struct WoodParams {
   bool draw = true;
   float errorPixels = 0.1f;
+  bool first = false;
 
   template <class Visitor>
   void visit(Visitor& v) {
@@ -39,6 +46,7 @@ struct WoodParams {
     v("wood_error_px", errorPixels, 0.0f, 100.0f,
       "wood levels of detail: the largest deviation of the simplified trunk and branches, in "
       "output pixels (0: the full mesh always)");
+    v("wood_first", first, kWoodFirstHelp);
   }
   bool levels() const { return draw && errorPixels > 0.0f; }  // whether the bake simplifies
 };
@@ -59,6 +67,10 @@ class WoodRenderer {
   // Draws `instances` (also in frame.instanceBuffer, in span order).
   void draw(const FrameContext& frame, std::span<const Instance> instances,
             float errorPixels = 0.0f);
+  // Runs `drawLeaves` and draws the wood as `params` says: before the leaves with
+  // params.first, after them otherwise, not at all without params.draw.
+  void drawAround(const WoodParams& params, const FrameContext& frame,
+                  std::span<const Instance> instances, const std::function<void()>& drawLeaves);
   void save(AssetFolder& asset) const;  // blobs and images prefixed "wood_", header key "wood"
   void load(AssetFolder& asset);
   size_t triangleCount() const { return mLevels.levels() == 0 ? 0 : mLevels.triangles(0); }

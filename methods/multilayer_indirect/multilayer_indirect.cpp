@@ -331,6 +331,11 @@ class MultilayerIndirect final : public Method {
 
   void draw(const FrameContext& frame, std::span<const Instance> instances) override {
     if (instances.empty()) return;
+    mWood.drawAround(mParams.wood, frame, instances, [&] { drawLeaves(frame, instances); });
+  }
+
+  // Everything but the wood (drawAround orders the two).
+  void drawLeaves(const FrameContext& frame, std::span<const Instance> instances) {
     mLod.update(frame, instances, mLevels.treeBounds, drawThresholds());
     const gl::Api& g = gl::api();
     g.BindVertexArray(mVao.id());
@@ -364,7 +369,6 @@ class MultilayerIndirect final : public Method {
     g.ActiveTexture(GL_TEXTURE0);
     g.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
     g.BindVertexArray(0);
-    if (mParams.wood.draw) mWood.draw(frame, instances, mParams.wood.errorPixels);
   }
 
   uint64_t lodSignature() const override {

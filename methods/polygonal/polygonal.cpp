@@ -15,6 +15,7 @@ namespace {
 // docs/METHODS.md show.
 struct PolygonalParams {
   bool drawWood = true;
+  bool woodFirst = false;
   bool mipmaps = true;
   bool ambientOcclusion = true;
   int aoRays = 32;
@@ -22,6 +23,7 @@ struct PolygonalParams {
   template <class Visitor>
   void visit(Visitor& v) {
     v("wood", drawWood, "draw the trunk and branches (false: leaves only)");
+    v("wood_first", woodFirst, kWoodFirstHelp);
     v("mipmaps", mipmaps, "mipmapped leaf textures (trilinear), as a real engine draws them");
     v("ambient_occlusion", ambientOcclusion,
       "lit runs: the leaves' ambient term scaled by the Embree AO the impostors bake "
@@ -121,8 +123,18 @@ class Polygonal final : public Method {
     if (mParams.drawWood) mWood.upload(device, mParams.mipmaps);
   }
 
+  // The reference's wood: always the full mesh.
+  WoodParams woodParams() const {
+    return {.draw = mParams.drawWood, .errorPixels = 0.0f, .first = mParams.woodFirst};
+  }
+
   void draw(const FrameContext& frame, std::span<const Instance> instances) override {
     if (instances.empty()) return;
+    mWood.drawAround(woodParams(), frame, instances, [&] { drawLeaves(frame, instances); });
+  }
+
+  // Everything but the wood (drawAround orders the two).
+  void drawLeaves(const FrameContext& frame, std::span<const Instance> instances) {
     const gl::Api& g = gl::api();
     const auto count = static_cast<GLsizei>(instances.size());
     mProgram.use();
@@ -141,7 +153,6 @@ class Polygonal final : public Method {
     }
     g.BindVertexArray(0);
     mLeafPolygonsDrawn = uint64_t(mIndices.size() / 6) * instances.size();
-    if (mParams.drawWood) mWood.draw(frame, instances);
   }
 
   uint64_t leafPolygonsDrawn() const override { return mLeafPolygonsDrawn; }
