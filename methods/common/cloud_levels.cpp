@@ -13,22 +13,28 @@ void CloudLevels::addLevel(size_t billboardsBefore, size_t billboards) {
 }
 
 void CloudLevels::draw(const LodInstances& lod, const std::function<void(size_t level)>& prepare,
-                       bool pulled) const {
+                       bool pulled, const FirstVertex& firstVertex) const {
   const gl::Api& g = gl::api();
   const auto& instances = lod.ranges();
   for (size_t level = 0; level < instances.size() && level < ranges.size(); ++level) {
     if (instances[level].count == 0) continue;
     if (prepare) prepare(level);
-    bindInstanceMatrices(lod.buffer(), 4, instances[level].first);
-    if (pulled) {
-      g.DrawArraysInstanced(GL_TRIANGLES, static_cast<GLint>(ranges[level].first),
-                            static_cast<GLsizei>(ranges[level].count), instances[level].count);
-      continue;
+    const std::vector<LodInstances::Range>& groups = lod.groupRanges(level);
+    for (size_t group = 0; group < groups.size(); ++group) {
+      if (groups[group].count == 0) continue;
+      bindInstanceMatrices(lod.buffer(), 4, groups[group].first);
+      if (pulled) {
+        const GLint first =
+            firstVertex ? firstVertex(level, group) : static_cast<GLint>(ranges[level].first);
+        g.DrawArraysInstanced(GL_TRIANGLES, first, static_cast<GLsizei>(ranges[level].count),
+                              groups[group].count);
+        continue;
+      }
+      g.DrawElementsInstanced(GL_TRIANGLES, static_cast<GLsizei>(ranges[level].count),
+                              GL_UNSIGNED_INT,
+                              reinterpret_cast<const void*>(sizeof(uint32_t) * ranges[level].first),
+                              groups[group].count);
     }
-    g.DrawElementsInstanced(GL_TRIANGLES, static_cast<GLsizei>(ranges[level].count),
-                            GL_UNSIGNED_INT,
-                            reinterpret_cast<const void*>(sizeof(uint32_t) * ranges[level].first),
-                            instances[level].count);
   }
 }
 

@@ -29,8 +29,12 @@ struct CloudLevels {
   // before a level's draw (to switch programs), the instance matrices go to locations 4–7.
   // `pulled`: no index buffer; DrawArrays over the same ranges (6 vertices per billboard), the
   // vertex shader finding its billboard and corner from gl_VertexID.
+  // With LodInstances groups, one draw per level and group; `firstVertex(level, group)` (pulled
+  // draws only) then names where the group's vertices start (the vertex shader maps them to
+  // billboards, e.g. through ViewOrders), else the level's range is drawn for every group.
+  using FirstVertex = std::function<GLint(size_t level, size_t group)>;
   void draw(const LodInstances& lod, const std::function<void(size_t level)>& prepare,
-            bool pulled = false) const;
+            bool pulled = false, const FirstVertex& firstVertex = {}) const;
 
   // The asset header's "bounds" and "levels".
   void save(AssetFolder& asset) const;

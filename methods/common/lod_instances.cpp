@@ -34,10 +34,13 @@ int LodInstances::levelFor(float radiusPixels, const std::vector<float>& thresho
 }
 
 void LodInstances::update(const FrameContext& frame, std::span<const Instance> instances,
-                          const Aabb& treeBounds, const std::vector<float>& thresholds) {
+                          const Aabb& treeBounds, const std::vector<float>& thresholds,
+                          const Grouping& group, int groups) {
   const int levels = static_cast<int>(thresholds.size()) + 1;
   const float radius = 0.5f * glm::length(treeBounds.extent());
-  std::vector<std::vector<glm::mat4>> byLevel(levels);
+  groups = group ? std::max(groups, 1) : 1;
+  // [level * groups + group]: the instances keep their order (nearest first) within each.
+  std::vector<std::vector<glm::mat4>> byGroup(size_t(levels) * groups);
   mSignature = 0xcbf29ce484222325ull;
   for (const Instance& instance : instances) {
     const glm::mat4 model = instance.modelMatrix();
@@ -48,15 +51,23 @@ void LodInstances::update(const FrameContext& frame, std::span<const Instance> i
                                              glm::length(frame.cameraPosition - centre)),
                        thresholds);
     }
-    byLevel[std::min(level, levels - 1)].push_back(model);
-    mSignature = fnv1aMix(mSignature, uint64_t(std::min(level, levels - 1)));
+    level = std::min(level, levels - 1);
+    const int g = group ? std::clamp(group(level, model), 0, groups - 1) : 0;
+    byGroup[size_t(level) * groups + g].push_back(model);
+    mSignature = fnv1aMix(mSignature, uint64_t(level));
   }
   mMatrices.clear();
   mRanges.assign(levels, Range{});
+  mGroupRanges.assign(levels, std::vector<Range>(groups));
   for (int level = 0; level < levels; ++level) {
-    mRanges[level] = {static_cast<GLint>(mMatrices.size()),
-                      static_cast<GLsizei>(byLevel[level].size())};
-    mMatrices.insert(mMatrices.end(), byLevel[level].begin(), byLevel[level].end());
+    mRanges[level].first = static_cast<GLint>(mMatrices.size());
+    for (int g = 0; g < groups; ++g) {
+      const std::vector<glm::mat4>& part = byGroup[size_t(level) * groups + g];
+      mGroupRanges[level][g] = {static_cast<GLint>(mMatrices.size()),
+                                static_cast<GLsizei>(part.size())};
+      mMatrices.insert(mMatrices.end(), part.begin(), part.end());
+    }
+    mRanges[level].count = static_cast<GLsizei>(mMatrices.size()) - mRanges[level].first;
   }
   mBuffer.upload(*mDevice, mOwner, mMatrices, "per-frame instance lists");
 }

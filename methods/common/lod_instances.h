@@ -1,5 +1,6 @@
 #pragma once
 
+#include <functional>
 #include <span>
 #include <string>
 #include <vector>
@@ -38,12 +39,19 @@ class LodInstances {
   // `thresholds` decrease: an instance whose radius spans fewer than thresholds[i] pixels goes
   // past level i; level 0 holds the largest, the last level the rest. frame.forcedLevel >= 0 puts
   // every instance in that level.
+  // `group` (optional) splits each level further: an instance's group in [0, groups) from its
+  // level and model matrix; within a level the instances are ordered by group (nearest first
+  // within a group, as given), and groupRanges(level) gives each group's part.
+  using Grouping = std::function<int(int level, const glm::mat4& model)>;
   void update(const FrameContext& frame, std::span<const Instance> instances,
-              const Aabb& treeBounds, const std::vector<float>& thresholds);
+              const Aabb& treeBounds, const std::vector<float>& thresholds,
+              const Grouping& group = {}, int groups = 1);
   GLuint buffer() const { return mBuffer.id(); }
   // A hash of every instance's level in the last update: changes when any instance switched.
   uint64_t signature() const { return mSignature; }
   const std::vector<Range>& ranges() const { return mRanges; }
+  // Level `level`'s instances group by group (one range when update had no grouping).
+  const std::vector<Range>& groupRanges(size_t level) const { return mGroupRanges[level]; }
 
   // The level an instance whose bounding radius spans `radiusPixels` output pixels gets.
   static int levelFor(float radiusPixels, const std::vector<float>& thresholds);
@@ -53,6 +61,7 @@ class LodInstances {
   std::string mOwner;
   StreamedMatrices mBuffer;
   std::vector<Range> mRanges;
+  std::vector<std::vector<Range>> mGroupRanges;  // [level][group]
   std::vector<glm::mat4> mMatrices;
   uint64_t mSignature = 0;
 };

@@ -16,6 +16,7 @@
 #include "methods/common/lod_instances.h"
 #include "methods/common/mesh.h"
 #include "methods/common/mipmaps.h"
+#include "methods/common/view_orders.h"
 #include "methods/common/wood_capture.h"
 #include "methods/multilayer_indirect/layered_billboard.h"
 #include "methods/multilayer_indirect/list_textures.h"
@@ -48,6 +49,7 @@ struct MultilayerParams {
   float parallaxMaxAngle = 70.0f;
   float lodLowResPixels = 0.0f;
   float woodCapturePixels = 0.0f;
+  int viewOrders = 0;
   WoodParams wood;
 
   template <class Visitor>
@@ -86,6 +88,11 @@ struct MultilayerParams {
       "below this projected radius (output pixels) the middle cloud skips the list walk and "
       "draws its low-resolution texture only, as the far cloud does; between lod_far_px and "
       "lod_near_px (0: the walk down to lod_far_px)");
+    v("view_orders", viewOrders, 0, 64,
+      "beyond the paper: the near and middle clouds' billboards are drawn front to back, in the "
+      "order sorted for the nearest of this many view directions, so the depth test rejects "
+      "hidden fragments before the list walk (one draw per direction in use; 2 bytes per "
+      "billboard and direction; 0: the bake's order)");
     wood.visit(v);
     v("wood_capture_px", woodCapturePixels, 0.0f, 100.0f,
       "the clouds drawn as low-resolution textures only (below lod_lowres_px, or lod_far_px) "
@@ -267,6 +274,7 @@ class MultilayerIndirect final : public Method {
     using gl::MemoryCategory;
     mBillboardBuffer = device.createBuffer(MemoryCategory::kGeometry, GL_SHADER_STORAGE_BUFFER,
                                            mBillboards, "billboards");
+    uploadViewOrders(device);
     // Only the instance matrices are attributes (locations 4–7, bound per level).
     mVao = gl::createVertexArray();
     const auto create = [&](int width, int height, GLenum format, const char* label) {
@@ -336,10 +344,22 @@ class MultilayerIndirect final : public Method {
 
   // Everything but the wood (drawAround orders the two).
   void drawLeaves(const FrameContext& frame, std::span<const Instance> instances) {
-    mLod.update(frame, instances, mLevels.treeBounds, drawThresholds());
+    const bool ordered = !mOrders.empty();
+    // Each tree's walked clouds take the order of the direction nearest its view of the tree.
+    const auto direction = [&](int level, const glm::mat4& model) {
+      if (level >= kFarLevel) return 0;
+      const glm::vec3 eye = glm::vec3(glm::inverse(model) * glm::vec4(frame.cameraPosition, 1.0f));
+      return mOrders.nearest(eye - mLevels.treeBounds.center());
+    };
+    mLod.update(frame, instances, mLevels.treeBounds, drawThresholds(),
+                ordered ? LodInstances::Grouping(direction) : LodInstances::Grouping(),
+                ordered ? int(mOrders.directions.size()) : 1);
     const gl::Api& g = gl::api();
     g.BindVertexArray(mVao.id());
     g.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, mBillboardBuffer.id());
+    // Unused without orders (uOrdered 0), bound so the binding never dangles.
+    g.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1,
+                     ordered ? mOrdersBuffer.id() : mBillboardBuffer.id());
     const glm::vec2 lowResAtlasSize(mLowRes[0].width, mLowRes[0].height);
     mDrawLevels.draw(
         mLod,
@@ -348,6 +368,7 @@ class MultilayerIndirect final : public Method {
           const gl::Program& program = far ? mFarProgram : mProgram;
           program.use();
           setFrameUniforms(program, frame);
+          program.set("uOrdered", ordered && !far ? 1 : 0);
           program.set("uLowResAtlasSize", lowResAtlasSize);
           if (far) {
             program.set("uAtlas", 0);
@@ -365,9 +386,15 @@ class MultilayerIndirect final : public Method {
             program.set("uCameraPosition", frame.cameraPosition);
           }
         },
-        true);
+        true,
+        [&](size_t level, size_t group) {
+          return ordered && level < kFarLevel
+                     ? static_cast<GLint>(6 * mOrders.firstSlot(int(group), level))
+                     : static_cast<GLint>(mDrawLevels.ranges[level].first);
+        });
     g.ActiveTexture(GL_TEXTURE0);
     g.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
+    g.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, 0);
     g.BindVertexArray(0);
   }
 
@@ -565,6 +592,30 @@ class MultilayerIndirect final : public Method {
     }
   }
 
+  // view_orders: the walked clouds' billboards sorted per view direction, 16-bit indices two to
+  // a word (multilayer_indirect.vert).
+  void uploadViewOrders(gl::Device& device) {
+    mOrders = {};
+    mOrdersBuffer = {};
+    if (mParams.viewOrders == 0) return;
+    if (mBillboards.size() > 65535)
+      throwInputError(
+          "multilayer_indirect: parameter 'view_orders' needs at most 65,535 billboards ({}); "
+          "set it to 0 or lower 'clusters'",
+          mBillboards.size());
+    std::vector<ViewOrders::Range> walked;
+    for (size_t level = 0; level < mLevels.ranges.size() && level < size_t(kFarLevel); ++level)
+      walked.push_back({mLevels.ranges[level].first / 6, mLevels.ranges[level].count / 6});
+    std::vector<glm::vec3> centers;
+    for (const BillboardRecord& b : mBillboards) centers.push_back(b.center);
+    mOrders = buildViewOrders(centers, walked, mParams.viewOrders);
+    std::vector<uint32_t> words((mOrders.order.size() + 1) / 2, 0u);
+    for (size_t i = 0; i < mOrders.order.size(); ++i)
+      words[i / 2] |= mOrders.order[i] << (16 * (i % 2));
+    mOrdersBuffer = device.createBuffer(gl::MemoryCategory::kGeometry, GL_SHADER_STORAGE_BUFFER,
+                                        words, "view orders");
+  }
+
   void bindLayeredTextures(const gl::Program& program) const {
     const gl::Api& g = gl::api();
     program.set("uHash", 0);
@@ -610,6 +661,8 @@ class MultilayerIndirect final : public Method {
   std::string mFragmentText;            // the fragment shader with its variant's defines
   std::string mFarVertexText;           // the vertex shader for the far level
   gl::Buffer mBillboardBuffer;          // mBillboards, pulled by the vertex shader
+  ViewOrders mOrders;                   // view_orders: empty without
+  gl::Buffer mOrdersBuffer;             // mOrders.order, 16-bit, two to a word
   gl::VertexArray mVao;
   gl::Texture mHashTexture, mListsTexture, mLeavesTexture, mLowResTexture, mLowResOcclusionTexture;
   std::vector<gl::Texture> mRecordTextures;  // one per record plane, ambient occlusion last

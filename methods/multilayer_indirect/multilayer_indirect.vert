@@ -2,7 +2,7 @@
 // The billboards of the multi-layer method, pulled from one 48-byte record per billboard (no
 // vertex or index buffer: four 48-byte corners and six indices per billboard were a third of the
 // method's memory). Drawn with DrawArrays, six vertices per billboard: gl_VertexID / 6 names the
-// billboard, gl_VertexID % 6 its corner. With FAR_LEVEL (defined before this line by the method)
+// billboard (or its slot in a view order), gl_VertexID % 6 its corner. With FAR_LEVEL (defined before this line by the method)
 // it feeds alpha_tested_texture.frag the low-resolution atlas uv instead.
 layout(location = 4) in mat4 inModel;  // per instance, locations 4..7
 
@@ -12,6 +12,10 @@ layout(location = 4) in mat4 inModel;  // per instance, locations 4..7
 //   [2] hash origin (x | y << 16), hash cells (x | y << 16),
 //       low-resolution texel origin (x | y << 16), texel size (x | y << 16)
 layout(std430, binding = 0) readonly buffer Billboards { uvec4 billboards[]; };
+// With view_orders the draw's slots name billboards through 16-bit entries, two to a word, the
+// walked clouds sorted front to back per view direction (view_orders.h).
+layout(std430, binding = 1) readonly buffer Orders { uint orders[]; };
+uniform int uOrdered;
 
 uniform mat4 uViewProjection;
 uniform vec2 uLowResAtlasSize;  // texels
@@ -38,7 +42,9 @@ uvec2 unpackPair(uint word) { return uvec2(word & 0xffffu, word >> 16u); }
 
 void main() {
   const int kCorners[6] = int[6](0, 1, 2, 0, 2, 3);  // two triangles, CCW from (−,−)
-  int billboard = gl_VertexID / 6;
+  int slot = gl_VertexID / 6;
+  int billboard =
+      uOrdered != 0 ? int(bitfieldExtract(orders[slot >> 1], 16 * (slot & 1), 16)) : slot;
   int corner = kCorners[gl_VertexID % 6];
   uvec4 a = billboards[3 * billboard], b = billboards[3 * billboard + 1],
         c = billboards[3 * billboard + 2];
