@@ -30,6 +30,12 @@ matplotlib.use("Agg")
 import matplotlib.image as mpimg  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from cycler import cycler  # noqa: E402
+
+# Ten colours solid, then the same ten dashed: runs have more than ten variants, and a repeated
+# colour made two methods one line.
+matplotlib.rcParams["axes.prop_cycle"] = cycler(linestyle=["-", "--"]) * cycler(
+    color=plt.get_cmap("tab10").colors)
 
 
 def number(text):
@@ -80,12 +86,17 @@ def finish_panel(axis, tree, xlabel, ylabel, log_x=False, log_y=False):
     axis.set_ylabel(ylabel)
     axis.set_title(tree)
     axis.grid(True, which="both", alpha=0.3)
-    axis.legend(fontsize=6)
+    # Below the panel: variant names with their parameters are long, and inside the axes the
+    # legend hid the curves.
+    legend = axis.legend(fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.16),
+                         frameon=False)
+    legend.set_in_layout(False)  # the panel keeps its size; the saved image grows to hold it
 
 
 def save_figure(fig, path):
     fig.tight_layout()
-    fig.savefig(path, dpi=150)
+    legends = [axis.get_legend() for axis in fig.axes if axis.get_legend() is not None]
+    fig.savefig(path, dpi=150, bbox_inches="tight", bbox_extra_artists=legends)
     plt.close(fig)
 
 
