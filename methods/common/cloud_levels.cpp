@@ -2,6 +2,9 @@
 
 #include <array>
 
+#include <glm/mat4x4.hpp>
+#include <glm/matrix.hpp>
+
 #include "common/error.h"
 #include "methods/method.h"
 
@@ -13,7 +16,7 @@ void CloudLevels::addLevel(size_t billboardsBefore, size_t billboards) {
 }
 
 void CloudLevels::draw(const LodInstances& lod, const std::function<void(size_t level)>& prepare,
-                       bool pulled, const FirstVertex& firstVertex) const {
+                       bool pulled, const GroupFirst& first) const {
   const gl::Api& g = gl::api();
   const auto& instances = lod.ranges();
   for (size_t level = 0; level < instances.size() && level < ranges.size(); ++level) {
@@ -23,19 +26,46 @@ void CloudLevels::draw(const LodInstances& lod, const std::function<void(size_t 
     for (size_t group = 0; group < groups.size(); ++group) {
       if (groups[group].count == 0) continue;
       bindInstanceMatrices(lod.buffer(), 4, groups[group].first);
+      const GLint start = first ? first(level, group) : static_cast<GLint>(ranges[level].first);
       if (pulled) {
-        const GLint first =
-            firstVertex ? firstVertex(level, group) : static_cast<GLint>(ranges[level].first);
-        g.DrawArraysInstanced(GL_TRIANGLES, first, static_cast<GLsizei>(ranges[level].count),
+        g.DrawArraysInstanced(GL_TRIANGLES, start, static_cast<GLsizei>(ranges[level].count),
                               groups[group].count);
         continue;
       }
-      g.DrawElementsInstanced(GL_TRIANGLES, static_cast<GLsizei>(ranges[level].count),
-                              GL_UNSIGNED_INT,
-                              reinterpret_cast<const void*>(sizeof(uint32_t) * ranges[level].first),
-                              groups[group].count);
+      g.DrawElementsInstanced(
+          GL_TRIANGLES, static_cast<GLsizei>(ranges[level].count), GL_UNSIGNED_INT,
+          reinterpret_cast<const void*>(sizeof(uint32_t) * size_t(start)), groups[group].count);
     }
   }
+}
+
+ViewOrders CloudLevels::viewOrders(std::span<const glm::vec3> centers, size_t sortedLevels,
+                                   int directions) const {
+  std::vector<ViewOrders::Range> sorted;
+  for (size_t level = 0; level < ranges.size() && level < sortedLevels; ++level)
+    sorted.push_back({ranges[level].first / 6, ranges[level].count / 6});
+  return buildViewOrders(centers, sorted, directions);
+}
+
+LodInstances::Grouping CloudLevels::directionGrouping(const ViewOrders& orders,
+                                                      const FrameContext& frame,
+                                                      size_t sortedLevels) const {
+  if (orders.empty()) return {};
+  const glm::vec3 centre = treeBounds.center();
+  return [&orders, &frame, centre, sortedLevels](int level, const glm::mat4& model) {
+    if (size_t(level) >= sortedLevels) return 0;
+    const glm::vec3 eye = glm::vec3(glm::inverse(model) * glm::vec4(frame.cameraPosition, 1.0f));
+    return orders.nearest(eye - centre);
+  };
+}
+
+std::vector<uint32_t> CloudLevels::withOrderedIndices(const std::vector<uint32_t>& indices,
+                                                      const ViewOrders& orders) {
+  std::vector<uint32_t> out = indices;
+  out.reserve(indices.size() + 6 * orders.order.size());
+  for (uint32_t billboard : orders.order)
+    out.insert(out.end(), indices.begin() + 6 * billboard, indices.begin() + 6 * billboard + 6);
+  return out;
 }
 
 namespace {

@@ -346,13 +346,8 @@ class MultilayerIndirect final : public Method {
   void drawLeaves(const FrameContext& frame, std::span<const Instance> instances) {
     const bool ordered = !mOrders.empty();
     // Each tree's walked clouds take the order of the direction nearest its view of the tree.
-    const auto direction = [&](int level, const glm::mat4& model) {
-      if (level >= kFarLevel) return 0;
-      const glm::vec3 eye = glm::vec3(glm::inverse(model) * glm::vec4(frame.cameraPosition, 1.0f));
-      return mOrders.nearest(eye - mLevels.treeBounds.center());
-    };
     mLod.update(frame, instances, mLevels.treeBounds, drawThresholds(),
-                ordered ? LodInstances::Grouping(direction) : LodInstances::Grouping(),
+                mDrawLevels.directionGrouping(mOrders, frame, kFarLevel),
                 ordered ? int(mOrders.directions.size()) : 1);
     const gl::Api& g = gl::api();
     g.BindVertexArray(mVao.id());
@@ -603,12 +598,9 @@ class MultilayerIndirect final : public Method {
           "multilayer_indirect: parameter 'view_orders' needs at most 65,535 billboards ({}); "
           "set it to 0 or lower 'clusters'",
           mBillboards.size());
-    std::vector<ViewOrders::Range> walked;
-    for (size_t level = 0; level < mLevels.ranges.size() && level < size_t(kFarLevel); ++level)
-      walked.push_back({mLevels.ranges[level].first / 6, mLevels.ranges[level].count / 6});
     std::vector<glm::vec3> centers;
     for (const BillboardRecord& b : mBillboards) centers.push_back(b.center);
-    mOrders = buildViewOrders(centers, walked, mParams.viewOrders);
+    mOrders = mLevels.viewOrders(centers, kFarLevel, mParams.viewOrders);
     std::vector<uint32_t> words((mOrders.order.size() + 1) / 2, 0u);
     for (size_t i = 0; i < mOrders.order.size(); ++i)
       words[i / 2] |= mOrders.order[i] << (16 * (i % 2));

@@ -35,11 +35,14 @@ class MethodContract : public testing::TestWithParam<std::string> {
     return nlohmann::json::object();
   }
 
-  // The method under test, or `other` (e.g. the reference) when given.
+  // The method under test with `extra` parameters, or `other` (e.g. the reference) when given.
   std::unique_ptr<Method> bakeAndUpload(const Tree& tree, const std::string& owner,
-                                        const std::string& other = "") {
+                                        const std::string& other = "",
+                                        const nlohmann::json& extra = nlohmann::json::object()) {
+    nlohmann::json params = quickParams(GetParam());
+    params.update(extra);
     auto method = other.empty()
-                      ? create(quickParams(GetParam()))
+                      ? create(params)
                       : builtinMethods().find(other).create(nlohmann::json::object(), "t");
     BakeContext context;
     context.seed = 11;
@@ -135,31 +138,50 @@ TEST_P(MethodContract, SameSeedGivesTheSameImages) {
   EXPECT_EQ(a, mHarness->render(*second, camera(tree))) << "baking twice";
 }
 
+// Pixels whose colour or alpha differ between two images of one size.
+long differingPixels(const ImageRgba8& a, const ImageRgba8& b) {
+  EXPECT_EQ(a.pixels.size(), b.pixels.size());
+  long differing = 0;
+  for (size_t i = 0; i + 4 <= std::min(a.pixels.size(), b.pixels.size()); i += 4)
+    differing += !std::equal(&a.pixels[i], &a.pixels[i] + 4, &b.pixels[i]);
+  return differing;
+}
+
 // `wood_first` only reorders the draws: the depth test keeps the same nearest surfaces, so the
 // image is the same but for depth ties where a leaf stem meets its twig (under 0.5 % of pixels).
 TEST_P(MethodContract, WoodFirstDrawsTheSameImage) {
   if (!create()->effectiveParams().contains("wood_first")) GTEST_SKIP() << "no wood_first";
   const Tree tree = test::smallTree();
   auto after = bakeAndUpload(tree, "after");
-  nlohmann::json params = quickParams(GetParam());
-  params["wood_first"] = true;
-  auto first = create(params);
-  BakeContext context;
-  context.seed = 11;
-  first->bake(tree, context);
-  {
-    gl::Device::OwnerScope scope(*mDevice, "first");
-    first->upload(*mDevice);
-  }
+  auto first = bakeAndUpload(tree, "first", "", {{"wood_first", true}});
   for (const float elevation : {0.0f, 45.0f}) {
     const ImageRgba8 a = mHarness->render(*after, camera(tree, elevation));
-    const ImageRgba8 b = mHarness->render(*first, camera(tree, elevation));
-    ASSERT_EQ(a.pixels.size(), b.pixels.size());
-    long differing = 0, covered = coveredPixels(a);
-    for (size_t i = 0; i < a.pixels.size(); i += 4)
-      differing += !std::equal(&a.pixels[i], &a.pixels[i] + 4, &b.pixels[i]);
+    const long covered = coveredPixels(a);
     ASSERT_GT(covered, 96 * 96 / 50);
-    EXPECT_LE(differing, covered / 200) << "elevation " << elevation;
+    EXPECT_LE(differingPixels(a, mHarness->render(*first, camera(tree, elevation))), covered / 200)
+        << "elevation " << elevation;
+  }
+}
+
+// `view_orders` only changes the order billboards are drawn in: every tree of a rotated forest,
+// near (the finest cloud) to far, shows the same image as in the bake's order (but for depth ties
+// between crossing billboards), and the orders take memory.
+TEST_P(MethodContract, ViewOrdersDrawTheSameForest) {
+  if (!create()->effectiveParams().contains("view_orders")) GTEST_SKIP() << "no view_orders";
+  const Tree tree = test::smallTree();
+  auto plain = bakeAndUpload(tree, "plain");
+  auto ordered = bakeAndUpload(tree, "ordered", "", {{"view_orders", 8}});
+  EXPECT_GT(mLedger.totals("ordered").geometry, mLedger.totals("plain").geometry);
+  const std::vector<Instance> forest = layoutForest(9, tree.boundingSphereRadius(), 5);
+  for (const int frame : {0, 3}) {
+    const Camera view = forestCamera(forest, tree.bounds, frame, 8, 40.0f);
+    const ImageRgba8 a = mHarness->renderForestFrame(*plain, forest, tree.bounds, view, 96, 96);
+    const long covered = coveredPixels(a);
+    ASSERT_GT(covered, 96 * 96 / 20) << "frame " << frame;
+    EXPECT_LE(differingPixels(
+                  a, mHarness->renderForestFrame(*ordered, forest, tree.bounds, view, 96, 96)),
+              covered / 200)
+        << "frame " << frame;
   }
 }
 

@@ -558,33 +558,15 @@ TEST(MultilayerIndirect, BillboardsCostOneRecordEachAndCorruptRecordsNameTheAsse
   expectLoadError(missing, "a missing leaf record");
 }
 
-// view_orders only changes the order billboards are drawn in: every instance, at every level,
-// shows the same image as in the bake's order (but for depth ties between crossing billboards),
-// and the orders cost 2 bytes per walked billboard and direction.
-TEST(MultilayerIndirect, ViewOrdersDrawTheSameImageFromEveryDirection) {
+// view_orders (the contract test checks the images): 16-bit orders of the walked clouds' (near
+// and middle) billboards, two to a word, per direction.
+TEST(MultilayerIndirect, ViewOrdersCostTwoBytesPerWalkedBillboardAndDirection) {
   const Tree tree = test::smallTree(800, 4);
-  VariantBench bench(160);
+  VariantBench bench(64);
   std::map<int, std::unique_ptr<Method>> methods;
   for (const int orders : {0, 8}) {
     methods[orders] = bench.bake(tree, {{"clusters", 40}, {"view_orders", orders}},
                                  "orders" + std::to_string(orders));
-  }
-  // Several rotated trees, near (the finest cloud) to far (the middle and far clouds), seen
-  // from the orbit's cameras around them.
-  const std::vector<Instance> forest = layoutForest(9, tree.boundingSphereRadius(), 5);
-  for (const int frame : {0, 3}) {
-    const Camera camera = forestCamera(forest, tree.bounds, frame, 8, 40.0f);
-    const ImageRgba8 plain =
-        bench.harness.renderForestFrame(*methods[0], forest, tree.bounds, camera, 160, 160);
-    const ImageRgba8 ordered =
-        bench.harness.renderForestFrame(*methods[8], forest, tree.bounds, camera, 160, 160);
-    long covered = 0, differing = 0;
-    for (size_t i = 0; i < plain.pixels.size(); i += 4) {
-      covered += plain.pixels[i + 3] > 0;
-      differing += !std::equal(&plain.pixels[i], &plain.pixels[i] + 4, &ordered.pixels[i]);
-    }
-    ASSERT_GT(covered, 160 * 160 / 20) << "frame " << frame;
-    EXPECT_LE(differing, covered / 200) << "frame " << frame;
   }
   const auto clouds = methods[8]->bakeReport().at("clouds");
   const uint64_t walked =

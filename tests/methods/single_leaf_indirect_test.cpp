@@ -134,7 +134,8 @@ TEST(SingleLeafIndirect, BadParametersNameTheParameter) {
                                                                  {"rotations", 0},
                                                                  {"tilts", 0},
                                                                  {"leaf_image_size", 2},
-                                                                 {"clusters", 0}});
+                                                                 {"clusters", 0},
+                                                                 {"view_orders", -1}});
 }
 
 }  // namespace
