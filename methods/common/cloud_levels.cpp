@@ -41,6 +41,7 @@ void CloudLevels::draw(const LodInstances& lod, const std::function<void(size_t 
 
 ViewOrders CloudLevels::viewOrders(std::span<const glm::vec3> centers, size_t sortedLevels,
                                    int directions) const {
+  if (directions <= 0) return {};
   std::vector<ViewOrders::Range> sorted;
   for (size_t level = 0; level < ranges.size() && level < sortedLevels; ++level)
     sorted.push_back({ranges[level].first / 6, ranges[level].count / 6});

@@ -168,7 +168,7 @@ class SingleLeafIndirect final : public Method {
                                "billboard vertices");
     // view_orders: every level sorted per direction, appended after the bake's indices.
     std::vector<glm::vec3> centers;
-    for (size_t i = 0; i + 6 <= mIndices.size(); i += 6) {
+    for (size_t i = 0; mParams.viewOrders > 0 && i + 6 <= mIndices.size(); i += 6) {
       glm::vec3 sum(0.0f);
       for (size_t k : {0, 1, 2, 5}) sum += mVertices[mIndices[i + k]].position;
       centers.push_back(0.25f * sum);
