@@ -1,7 +1,5 @@
 #include "methods/billboard_cloud/billboard_cloud.h"
 
-#include <tbb/parallel_for.h>
-
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -100,22 +98,13 @@ class BillboardCloudMethod final : public Method {
     }
     const LeafImageSampler sampler(tree);
     const WoodColorSampler woodColors(tree);
-    const int sides = mParams.backCapture ? 2 : 1;
-    std::vector<ImageRgba8> images(billboards.size() * sides);
-    tbb::parallel_for(size_t(0), images.size(), [&](size_t k) {
-      const size_t i = k % billboards.size();
-      images[k] = captureLeavesOrthographic(
-          tree, sampler, billboards[i]->leaves, *billboards[i], sizes[i].x, sizes[i].y,
-          mParams.supersample, k >= billboards.size(), &woodColors, woodInImages.perBillboard[i]);
-    });
+    const TwoSidedAtlas captured = captureTwoSidedAtlas(
+        tree, sampler, billboards, sizes, mParams.supersample, mParams.backCapture, kAtlasPadding,
+        kAtlasAlignment, &woodColors, &woodInImages.perBillboard);
+    const ImageAtlas& atlas = captured.front;
     // Both sides share one layout: the back capture is the atlas' second layer.
-    const std::vector<ImageRgba8> fronts(images.begin(), images.begin() + long(billboards.size()));
-    const ImageAtlas atlas = composeAtlas(fronts, kAtlasPadding, kAtlasAlignment);
     mAtlas = {atlas.image};
-    if (mParams.backCapture) {
-      const std::vector<ImageRgba8> backs(images.begin() + long(billboards.size()), images.end());
-      mAtlas.push_back(composeAtlas(backs, kAtlasPadding, kAtlasAlignment).image);
-    }
+    if (mParams.backCapture) mAtlas.push_back(captured.back);
     mVertices.clear();
     mIndices.clear();
     for (size_t i = 0; i < billboards.size(); ++i) {

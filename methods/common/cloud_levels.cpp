@@ -1,5 +1,6 @@
 #include "methods/common/cloud_levels.h"
 
+#include <algorithm>
 #include <array>
 
 #include <glm/mat4x4.hpp>
@@ -37,6 +38,35 @@ void CloudLevels::draw(const LodInstances& lod, const std::function<void(size_t 
           reinterpret_cast<const void*>(sizeof(uint32_t) * size_t(start)), groups[group].count);
     }
   }
+}
+
+ShaderLodLevels shaderLodLevels(const CloudLevels& clouds, const std::vector<float>& thresholds,
+                                float lowResPixels) {
+  ShaderLodLevels out;
+  out.draw.treeBounds = clouds.treeBounds;
+  out.thresholds = thresholds;
+  if (lowResPixels > 0.0f &&
+      std::find(thresholds.begin(), thresholds.end(), lowResPixels) == thresholds.end()) {
+    out.thresholds.insert(std::find_if(out.thresholds.begin(), out.thresholds.end(),
+                                       [&](float t) { return t < lowResPixels; }),
+                          lowResPixels);
+  }
+  out.firstTextureCloud = clouds.ranges.size();
+  out.lookupLevels = out.thresholds.size() + 1;
+  for (size_t level = 0; level <= out.thresholds.size(); ++level) {
+    // The level holds radii in [thresholds[level], thresholds[level − 1]).
+    const size_t cloud = level < out.thresholds.size()
+                             ? size_t(LodInstances::levelFor(out.thresholds[level], thresholds))
+                             : thresholds.size();
+    out.draw.ranges.push_back(clouds.ranges[std::min(cloud, clouds.ranges.size() - 1)]);
+    const bool texture =
+        lowResPixels > 0.0f && level > 0 && out.thresholds[level - 1] <= lowResPixels;
+    if (texture && out.lookupLevels > level) {
+      out.lookupLevels = level;
+      out.firstTextureCloud = std::min(cloud, clouds.ranges.size() - 1);
+    }
+  }
+  return out;
 }
 
 ViewOrders CloudLevels::viewOrders(std::span<const glm::vec3> centers, size_t sortedLevels,

@@ -59,6 +59,20 @@ struct CloudLevels {
   void load(AssetFolder& asset, size_t indexCount);
 };
 
+// The draw levels of a cloud family whose trees spanning fewer than `lowResPixels` output pixels
+// of radius draw their cloud's low-resolution texture instead of its per-fragment lookup (the
+// multi-layer paper's shader level of detail, §5.1): the clouds' thresholds with lowResPixels
+// among them; each draw level draws one cloud's range, as a lookup (the first `lookupLevels`,
+// which are the clouds' own first levels) or as a texture (the rest). lowResPixels 0: none.
+struct ShaderLodLevels {
+  CloudLevels draw;               // one range per draw level; a cloud split by lowResPixels twice
+  std::vector<float> thresholds;  // of the draw levels, for LodInstances::update
+  size_t lookupLevels = 0;        // draw levels before the first texture-only one
+  size_t firstTextureCloud = 0;   // the finest cloud a texture-only level draws (or the count)
+};
+ShaderLodLevels shaderLodLevels(const CloudLevels& clouds, const std::vector<float>& thresholds,
+                                float lowResPixels);
+
 // InputError naming `folder` when an index points past the vertices.
 void validateIndices(const std::vector<uint32_t>& indices, size_t vertexCount,
                      const std::string& folder);

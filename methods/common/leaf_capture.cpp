@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include <tbb/parallel_for.h>
+
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
@@ -337,6 +339,29 @@ ImageAtlas composeAtlas(const std::vector<ImageRgba8>& images, int padding, int 
     }
   }
   dilateTransparentColors(atlas.image, alignment);
+  return atlas;
+}
+
+TwoSidedAtlas captureTwoSidedAtlas(const Tree& tree, const LeafImageSampler& sampler,
+                                   const std::vector<const Billboard*>& billboards,
+                                   const std::vector<glm::ivec2>& sizes, int supersample,
+                                   bool backToo, int padding, int alignment,
+                                   const WoodColorSampler* wood,
+                                   const std::vector<std::vector<uint32_t>>* woodPerBillboard) {
+  const size_t count = billboards.size();
+  std::vector<ImageRgba8> images(count * (backToo ? 2 : 1));
+  static const std::vector<uint32_t> kNoWood;
+  tbb::parallel_for(size_t(0), images.size(), [&](size_t k) {
+    const size_t i = k % count;
+    images[k] = captureLeavesOrthographic(tree, sampler, billboards[i]->leaves, *billboards[i],
+                                          sizes[i].x, sizes[i].y, supersample, k >= count, wood,
+                                          woodPerBillboard ? (*woodPerBillboard)[i] : kNoWood);
+  });
+  TwoSidedAtlas atlas;
+  atlas.front = composeAtlas({images.begin(), images.begin() + long(count)}, padding, alignment);
+  if (backToo)
+    atlas.back =
+        composeAtlas({images.begin() + long(count), images.end()}, padding, alignment).image;
   return atlas;
 }
 

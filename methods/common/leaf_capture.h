@@ -125,6 +125,21 @@ struct ImageAtlas {
 };
 ImageAtlas composeAtlas(const std::vector<ImageRgba8>& images, int padding, int alignment);
 
+// Each billboard's leaves captured orthographically (captureLeavesOrthographic) at sizes[i]
+// texels, from its front and, with `backToo`, its back, packed into one atlas per side with the
+// same layout (a back capture is sampled with the front's uv). `woodPerBillboard`, when given,
+// names per billboard the wood triangles its images hold (`wood` samples their colour).
+struct TwoSidedAtlas {
+  ImageAtlas front;
+  ImageRgba8 back;  // empty without backToo
+};
+TwoSidedAtlas captureTwoSidedAtlas(
+    const Tree& tree, const LeafImageSampler& sampler,
+    const std::vector<const Billboard*>& billboards, const std::vector<glm::ivec2>& sizes,
+    int supersample, bool backToo, int padding, int alignment,
+    const WoodColorSampler* wood = nullptr,
+    const std::vector<std::vector<uint32_t>>* woodPerBillboard = nullptr);
+
 // Gives fully transparent texels the colour of their nearest covered neighbours (up to
 // `passes` texels away), so bilinear and mip filtering near leaf edges do not pull in black.
 void dilateTransparentColors(ImageRgba8& image, int passes);

@@ -26,6 +26,8 @@ struct SingleLeafParams {
   OrientationBins bins;
   int leafImageSize = 64;
   int viewOrders = 0;
+  float lodLowResPixels = 110.0f;
+  int lowResTexelsPerCell = 1;
   WoodParams wood;
 
   template <class Visitor>
@@ -42,6 +44,13 @@ struct SingleLeafParams {
       "nearest of this many view directions, so the depth test rejects hidden fragments before "
       "the cell lookup (one draw per direction in use; 24 bytes of indices per billboard and "
       "direction; 0: the bake's order)");
+    v("lod_lowres_px", lodLowResPixels, 0.0f, 100000.0f,
+      "beyond the 2005 paper, the multi-layer paper's shader level of detail (its §5.1): a tree "
+      "whose bounding radius spans fewer output pixels draws its cloud as a low-resolution "
+      "texture (each billboard's leaves captured from both sides) instead of the cell lookup; "
+      "0: every tree does the lookup");
+    v("lowres_texels_per_cell", lowResTexelsPerCell, 1, 8,
+      "texels per grid cell side of the low-resolution textures");
     wood.visit(v);
   }
 };
@@ -54,21 +63,27 @@ struct Vertex {
   // The cells a fragment looks at, by how far the billboard's largest leaf reaches past its
   // cell: 0 its own cell, 1 the 2×2 cells nearest the fragment, r + 1 the cells within r.
   int32_t reach;
+  glm::vec2 lowResUv;  // in the low-resolution atlas; 0 for clouds never drawn from it
 };
 
 // The asset header's own part.
 struct AssetFields {
   glm::ivec2 indexSize{0};  // the cell index atlas
   size_t leafImages = 0;
+  size_t lowResLayers = 0;  // the low-resolution atlas: 0, or front and back
   template <class V>
   void visit(V& v) {
     v("index_size", indexSize);
     v("leaf_images", leafImages);
+    v("lowres_layers", lowResLayers);
   }
 };
 
 constexpr int kScaleSteps = 32;  // a leaf's size in cells, in 1/32 steps up to 255/32
 constexpr int kMaxRadius = 3;    // larger leaves are clipped to 7×7 cells
+constexpr int kLowResPadding = 4, kLowResAlignment = 8;  // of the low-resolution atlas
+constexpr int kLowResSupersample = 4;                    // capture samples per texel side
+constexpr int kMaxLowResTexels = 1024;                   // per side of one billboard's image
 
 class SingleLeafIndirect final : public Method {
  public:
@@ -150,16 +165,50 @@ class SingleLeafIndirect final : public Method {
       const glm::ivec4 grid(layout.origins[i], grids[i].cells);
       for (int c = 0; c < 4; ++c) {
         mVertices.push_back({billboards[i]->corner(c), billboards[i]->normal,
-                             glm::vec2(kU[c], kV[c]), grid, reach[i]});
+                             glm::vec2(kU[c], kV[c]), grid, reach[i], glm::vec2(0.0f)});
       }
       for (uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) mIndices.push_back(base + k);
     }
     const LeafImageSampler sampler(tree);
     mLeafImages = buildOrientedLeafImages(tree, sampler, mParams.bins, mParams.leafImageSize);
-    mReport = {{"clouds", describeClouds(clouds)}, {"index_atlas", {layout.width, layout.height}},
-               {"filled_cells", filled},           {"leaf_images", mLeafImages.size()},
-               {"cell_length", cellLength},        {"leaves_represented", represented},
-               {"leaves", tree.leaves.size()},     {"billboards_per_reach", billboardsPerReach}};
+    setDrawLevels();
+    // The clouds some trees draw as textures: each billboard's leaves seen from both sides, at
+    // lowres_texels_per_cell texels a grid cell (§5.1 of the multi-layer paper bakes its texture
+    // from its own representation; the leaves themselves are what that representation shows).
+    const size_t firstTextured = mShaderLod.firstTextureCloud < mLevels.ranges.size()
+                                     ? mLevels.ranges[mShaderLod.firstTextureCloud].first / 6
+                                     : billboards.size();
+    std::vector<const Billboard*> textured(billboards.begin() + long(firstTextured),
+                                           billboards.end());
+    // Texels from the cell_size cells, not the grid's own (a billboard crowded with leaves halves
+    // its cells so that each leaf has one; its texture need not follow).
+    std::vector<glm::ivec2> texels;
+    for (size_t i = firstTextured; i < billboards.size(); ++i) {
+      const glm::vec2 cells = 2.0f * billboards[i]->halfExtents / cellLength;
+      texels.push_back(glm::clamp(glm::ivec2(glm::ceil(cells * float(mParams.lowResTexelsPerCell))),
+                                  glm::ivec2(1), glm::ivec2(kMaxLowResTexels)));
+    }
+    mLowRes.clear();
+    if (!textured.empty()) {
+      TwoSidedAtlas atlas =
+          captureTwoSidedAtlas(tree, sampler, textured, texels, kLowResSupersample, true,
+                               kLowResPadding, kLowResAlignment);
+      mLowRes = {std::move(atlas.front.image), std::move(atlas.back)};
+      for (size_t i = firstTextured; i < billboards.size(); ++i) {
+        for (int c = 0; c < 4; ++c)
+          mVertices[4 * i + size_t(c)].lowResUv = atlas.front.cornerUv(i - firstTextured, c);
+      }
+    }
+    mReport = {{"clouds", describeClouds(clouds)},
+               {"index_atlas", {layout.width, layout.height}},
+               {"filled_cells", filled},
+               {"leaf_images", mLeafImages.size()},
+               {"cell_length", cellLength},
+               {"leaves_represented", represented},
+               {"leaves", tree.leaves.size()},
+               {"billboards_per_reach", billboardsPerReach},
+               {"lowres_atlas",
+                {mLowRes.empty() ? 0 : mLowRes[0].width, mLowRes.empty() ? 0 : mLowRes[0].height}}};
   }
 
   void upload(gl::Device& device) override {
@@ -173,7 +222,7 @@ class SingleLeafIndirect final : public Method {
       for (size_t k : {0, 1, 2, 5}) sum += mVertices[mIndices[i + k]].position;
       centers.push_back(0.25f * sum);
     }
-    mOrders = mLevels.viewOrders(centers, mLevels.ranges.size(), mParams.viewOrders);
+    mOrders = mLevels.viewOrders(centers, mShaderLod.lookupLevels, mParams.viewOrders);
     mIbo = device.createBuffer(MemoryCategory::kGeometry, GL_ELEMENT_ARRAY_BUFFER,
                                CloudLevels::withOrderedIndices(mIndices, mOrders),
                                "billboard indices");
@@ -195,6 +244,9 @@ class SingleLeafIndirect final : public Method {
     g.EnableVertexAttribArray(8);
     g.VertexAttribIPointer(8, 1, GL_INT, sizeof(Vertex),
                            reinterpret_cast<const void*>(offsetof(Vertex, reach)));
+    g.EnableVertexAttribArray(9);
+    g.VertexAttribPointer(9, 2, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                          reinterpret_cast<const void*>(offsetof(Vertex, lowResUv)));
     g.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, mIbo.id());
     g.BindVertexArray(0);
     g.BindBuffer(GL_ARRAY_BUFFER, 0);
@@ -204,9 +256,18 @@ class SingleLeafIndirect final : public Method {
     device.uploadTexture(mIndexTexture, GL_RED_INTEGER, GL_UNSIGNED_INT, mIndex.data());
     gl::setTextureSampling(mIndexTexture, false, false);
     mLeavesTexture = uploadAlphaTestedArray(device, mLeafImages, true, "oriented leaf images");
+    const gl::ShaderSource& vertex =
+        gl::embeddedShader("methods/single_leaf_indirect/single_leaf_indirect.vert");
     mProgram = device.createProgram(
-        {gl::embeddedShader("methods/single_leaf_indirect/single_leaf_indirect.vert"),
-         gl::embeddedShader("methods/single_leaf_indirect/single_leaf_indirect.frag")});
+        {vertex, gl::embeddedShader("methods/single_leaf_indirect/single_leaf_indirect.frag")});
+    if (!mLowRes.empty()) {
+      mLowResTexture = uploadAlphaTestedArray(device, mLowRes, true, "low-resolution atlas");
+      mTextureVertexText = std::string(vertex.text);
+      mTextureVertexText.insert(mTextureVertexText.find('\n') + 1, "#define LOWRES_TEXTURE 1\n");
+      mTextureProgram =
+          device.createProgram({{vertex.path, mTextureVertexText},
+                                gl::embeddedShader("methods/common/alpha_tested_texture.frag")});
+    }
     mLod.attach(device, device.owner() + "/frame");
     if (mParams.wood.draw) mWood.upload(device, true);
   }
@@ -218,27 +279,44 @@ class SingleLeafIndirect final : public Method {
 
   // Everything but the wood (drawAround orders the two).
   void drawLeaves(const FrameContext& frame, std::span<const Instance> instances) {
-    const size_t levels = mLevels.ranges.size();
-    mLod.update(frame, instances, mLevels.treeBounds, mParams.cloud.thresholds(),
-                mLevels.directionGrouping(mOrders, frame, levels),
+    const size_t lookups = mShaderLod.lookupLevels;
+    mLod.update(frame, instances, mLevels.treeBounds, mShaderLod.thresholds,
+                mShaderLod.draw.directionGrouping(mOrders, frame, lookups),
                 mOrders.empty() ? 1 : int(mOrders.directions.size()));
     const gl::Api& g = gl::api();
-    mProgram.use();
-    setFrameUniforms(mProgram, frame);
-    mProgram.set("uCells", 0);
-    mProgram.set("uLeaves", 1);
-    mProgram.set("uImagesPerSide", mParams.bins.tilts * mParams.bins.rotations);
-    g.ActiveTexture(GL_TEXTURE0);
-    g.BindTexture(GL_TEXTURE_2D, mIndexTexture.id());
-    g.ActiveTexture(GL_TEXTURE1);
-    g.BindTexture(GL_TEXTURE_2D_ARRAY, mLeavesTexture.id());
-    g.ActiveTexture(GL_TEXTURE0);
     g.BindVertexArray(mVao.id());
-    mLevels.draw(mLod, {}, false, [&](size_t level, size_t group) {
-      return mOrders.empty()
-                 ? static_cast<GLint>(mLevels.ranges[level].first)
-                 : static_cast<GLint>(mIndices.size() + 6 * mOrders.firstSlot(int(group), level));
-    });
+    mShaderLod.draw.draw(
+        mLod,
+        [&](size_t level) {
+          if (level >= lookups) {
+            mTextureProgram.use();
+            setFrameUniforms(mTextureProgram, frame);
+            mTextureProgram.set("uAtlas", 0);
+            mTextureProgram.set("uBackLayer", 1.0f);
+            mTextureProgram.set("uBinaryAlpha", 0);
+            mTextureProgram.set("uHasOcclusion", 0);
+            g.ActiveTexture(GL_TEXTURE0);
+            g.BindTexture(GL_TEXTURE_2D_ARRAY, mLowResTexture.id());
+            return;
+          }
+          mProgram.use();
+          setFrameUniforms(mProgram, frame);
+          mProgram.set("uCells", 0);
+          mProgram.set("uLeaves", 1);
+          mProgram.set("uImagesPerSide", mParams.bins.tilts * mParams.bins.rotations);
+          g.ActiveTexture(GL_TEXTURE0);
+          g.BindTexture(GL_TEXTURE_2D, mIndexTexture.id());
+          g.ActiveTexture(GL_TEXTURE1);
+          g.BindTexture(GL_TEXTURE_2D_ARRAY, mLeavesTexture.id());
+          g.ActiveTexture(GL_TEXTURE0);
+        },
+        false,
+        [&](size_t level, size_t group) {
+          return mOrders.empty() || level >= lookups
+                     ? static_cast<GLint>(mShaderLod.draw.ranges[level].first)
+                     : static_cast<GLint>(mIndices.size() +
+                                          6 * mOrders.firstSlot(int(group), level));
+        });
     g.BindVertexArray(0);
   }
 
@@ -252,11 +330,12 @@ class SingleLeafIndirect final : public Method {
   void save(AssetFolder& asset) const override {
     asset.describe("single_leaf_indirect", effectiveParams(), mReport);
     mLevels.save(asset);
-    asset.writeFields(AssetFields{mIndexSize, mLeafImages.size()});
+    asset.writeFields(AssetFields{mIndexSize, mLeafImages.size(), mLowRes.size()});
     asset.writeBlob("vertices.bin", mVertices);
     asset.writeBlob("indices.bin", mIndices);
     asset.writeBlob("cell_index.bin", mIndex);
     asset.writeImages("leaf_image_{}.png", mLeafImages);
+    asset.writeImages("lowres_{}.png", mLowRes);
     mWood.save(asset);
     asset.writeHeader();
   }
@@ -276,6 +355,7 @@ class SingleLeafIndirect final : public Method {
                         kMaxRadius + 1);
     }
     mLeafImages = asset.readImages("leaf_image_{}.png", fields.leafImages);
+    mLowRes = asset.readImages("lowres_{}.png", fields.lowResLayers);
     if (mIndex.size() != size_t(mIndexSize.x) * mIndexSize.y)
       throwInputError("{}: cell index size mismatch", folder);
     for (uint32_t word : mIndex) {
@@ -285,14 +365,26 @@ class SingleLeafIndirect final : public Method {
     }
     validateIndices(mIndices, mVertices.size(), asset.folder().string());
     mLevels.load(asset, mIndices.size());
+    setDrawLevels();
+    const bool textured = mShaderLod.firstTextureCloud < mLevels.ranges.size();
+    if (textured && (mLowRes.size() != 2 || mLowRes[0].width != mLowRes[1].width ||
+                     mLowRes[0].height != mLowRes[1].height))
+      throwInputError("{}: lod_lowres_px needs a front and a back low-resolution atlas of one size",
+                      folder);
     mWood.load(asset);
     asset.finishReading();
   }
 
  private:
+  // The draw levels: mLevels' clouds, split where lod_lowres_px turns lookups into textures.
+  void setDrawLevels() {
+    mShaderLod = shaderLodLevels(mLevels, mParams.cloud.thresholds(), mParams.lodLowResPixels);
+  }
+
   SingleLeafParams mParams;
   nlohmann::json mReport;
   CloudLevels mLevels;
+  ShaderLodLevels mShaderLod;
   std::vector<Vertex> mVertices;
   std::vector<uint32_t> mIndices;
   ViewOrders mOrders;  // view_orders: empty without
@@ -300,10 +392,12 @@ class SingleLeafIndirect final : public Method {
   // Per cell: 0 empty, else (image + 1) | scale · kScaleSteps << 12 | depth rank << 20.
   std::vector<uint32_t> mIndex;
   std::vector<ImageRgba8> mLeafImages;
+  std::vector<ImageRgba8> mLowRes;  // front and back low-resolution atlases, or none
   gl::Buffer mVbo, mIbo;
   gl::VertexArray mVao;
-  gl::Texture mIndexTexture, mLeavesTexture;
-  gl::Program mProgram;
+  gl::Texture mIndexTexture, mLeavesTexture, mLowResTexture;
+  gl::Program mProgram, mTextureProgram;
+  std::string mTextureVertexText;  // the vertex shader with LOWRES_TEXTURE defined
   LodInstances mLod;
   WoodRenderer mWood;
 };

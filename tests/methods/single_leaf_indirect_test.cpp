@@ -9,6 +9,7 @@
 
 #include "bench/harness.h"
 #include "common/error.h"
+#include "methods/common/cloud_levels.h"
 #include "methods/common/leaf_orientations.h"
 #include "methods/method.h"
 #include "test_support.h"
@@ -86,6 +87,95 @@ TEST(SingleLeafIndirect, ShowsEveryLeafAndKeepsLeafSizeWhateverTheCellSize) {
   EXPECT_NEAR(double(covered[1]) / double(covered[0]), 1.0, 0.25);
 }
 
+TEST(ShaderLodLevels, SplitsTheCloudAtTheTextureThresholdAndKeepsLookupsFirst) {
+  CloudLevels clouds;
+  clouds.addLevel(0, 10);  // near: billboards 0–9
+  clouds.addLevel(10, 4);  // middle
+  clouds.addLevel(14, 2);  // far
+  const std::vector<float> thresholds = {120.0f, 35.0f};
+  const auto firsts = [](const ShaderLodLevels& levels) {
+    std::vector<uint32_t> out;
+    for (const CloudLevels::Range& range : levels.draw.ranges) out.push_back(range.first / 6);
+    return out;
+  };
+  const ShaderLodLevels none = shaderLodLevels(clouds, thresholds, 0.0f);
+  EXPECT_EQ(none.thresholds, thresholds);
+  EXPECT_EQ(none.lookupLevels, 3u);
+  EXPECT_EQ(none.firstTextureCloud, 3u);
+  EXPECT_EQ(firsts(none), (std::vector<uint32_t>{0, 10, 14}));
+
+  const ShaderLodLevels middle = shaderLodLevels(clouds, thresholds, 90.0f);
+  EXPECT_EQ(middle.thresholds, (std::vector<float>{120.0f, 90.0f, 35.0f}));
+  EXPECT_EQ(middle.lookupLevels, 2u);  // near and middle looked up above 90 px
+  EXPECT_EQ(middle.firstTextureCloud, 1u);
+  EXPECT_EQ(firsts(middle), (std::vector<uint32_t>{0, 10, 10, 14}));
+
+  const ShaderLodLevels atFar = shaderLodLevels(clouds, thresholds, 35.0f);
+  EXPECT_EQ(atFar.thresholds, thresholds);
+  EXPECT_EQ(atFar.lookupLevels, 2u);
+  EXPECT_EQ(atFar.firstTextureCloud, 2u);
+
+  const ShaderLodLevels aboveNear = shaderLodLevels(clouds, thresholds, 200.0f);
+  EXPECT_EQ(aboveNear.thresholds, (std::vector<float>{200.0f, 120.0f, 35.0f}));
+  EXPECT_EQ(aboveNear.lookupLevels, 1u);
+  EXPECT_EQ(aboveNear.firstTextureCloud, 0u);
+  EXPECT_EQ(firsts(aboveNear), (std::vector<uint32_t>{0, 0, 10, 14}));
+  // Every radius draws the cloud it drew without textures.
+  for (const float radius : {500.0f, 150.0f, 100.0f, 50.0f, 10.0f}) {
+    const int cloud = LodInstances::levelFor(radius, thresholds);
+    const int level = LodInstances::levelFor(radius, aboveNear.thresholds);
+    EXPECT_EQ(aboveNear.draw.ranges[size_t(level)].first, clouds.ranges[size_t(cloud)].first)
+        << radius;
+    EXPECT_EQ(size_t(level) >= aboveNear.lookupLevels, radius < 200.0f) << radius;
+  }
+}
+
+TEST(SingleLeafIndirect, LowResolutionTextureShowsWhatTheLookupShows) {
+  // lod_lowres_px above any projected size draws every tree as the texture, captured from the
+  // leaves themselves: coverage near the reference's (magnified texels round the leaves off; in
+  // development runs 0.79 of it) and no farther from it than the lookup's (0.53: the regular
+  // pattern loses leaf overlap), about the lookup's colour, through another path.
+  const Tree tree = test::smallTree(800, 4);
+  auto context = test::makeTestContext();
+  gl::Ledger ledger;
+  gl::Device device(ledger);
+  RenderSettings settings;
+  settings.width = settings.height = 128;
+  Harness harness(device, settings);
+  const Camera camera = orbitCamera(tree.bounds, {2.0f, 20.0f, 40.0f}, 40.0f);
+  std::vector<ImageRgba8> images;
+  for (const double lowResPixels : {0.0, 100000.0}) {
+    auto method =
+        test::bakeAndUpload(device, tree, "single_leaf_indirect",
+                            {{"lod_lowres_px", lowResPixels}, {"lod", false}, {"wood", false}},
+                            Shading::kUnlit, "lowres " + std::to_string(lowResPixels));
+    const auto atlas = method->bakeReport().at("lowres_atlas");
+    EXPECT_EQ(atlas[0].get<int>() > 0, lowResPixels > 0.0);
+    images.push_back(harness.render(*method, camera));
+  }
+  auto reference = test::bakeAndUpload(device, tree, "polygonal", {{"wood", false}},
+                                       Shading::kUnlit, "reference");
+  images.push_back(harness.render(*reference, camera));
+  long covered[3] = {0, 0, 0}, differing = 0;
+  double green[3] = {0.0, 0.0, 0.0};
+  for (size_t i = 0; i < images[0].pixels.size(); i += 4) {
+    for (int k = 0; k < 3; ++k) {
+      if (images[size_t(k)].pixels[i + 3] < 128) continue;
+      ++covered[k];
+      green[k] += images[size_t(k)].pixels[i + 1];
+    }
+    differing += images[0].pixels[i + 3] != images[1].pixels[i + 3] ||
+                 images[0].pixels[i + 1] != images[1].pixels[i + 1];
+  }
+  ASSERT_GT(covered[2], 500);
+  ASSERT_GT(covered[0], 0);
+  ASSERT_GT(covered[1], 0);
+  EXPECT_NEAR(double(covered[1]) / double(covered[2]), 0.9, 0.25);
+  EXPECT_LE(std::abs(covered[1] - covered[2]), std::abs(covered[0] - covered[2]));
+  EXPECT_NEAR(green[1] / double(covered[1]), green[0] / double(covered[0]), 25.0);
+  EXPECT_GT(differing, 0) << "the texture path drew the lookup's image";
+}
+
 TEST(LeafOrientations, IndexEncodesRotationTiltAndSide) {
   Billboard billboard;
   billboard.normal = {0, 0, 1};
@@ -135,7 +225,9 @@ TEST(SingleLeafIndirect, BadParametersNameTheParameter) {
                                                                  {"tilts", 0},
                                                                  {"leaf_image_size", 2},
                                                                  {"clusters", 0},
-                                                                 {"view_orders", -1}});
+                                                                 {"view_orders", -1},
+                                                                 {"lod_lowres_px", -1.0},
+                                                                 {"lowres_texels_per_cell", 0}});
 }
 
 }  // namespace
