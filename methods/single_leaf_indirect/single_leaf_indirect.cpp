@@ -295,6 +295,7 @@ class SingleLeafIndirect final : public Method {
             mTextureProgram.set("uBackLayer", 1.0f);
             mTextureProgram.set("uBinaryAlpha", 0);
             mTextureProgram.set("uHasOcclusion", 0);
+            mTextureProgram.set("uOcclusion", 1);  // unused; off the atlas' unit
             g.ActiveTexture(GL_TEXTURE0);
             g.BindTexture(GL_TEXTURE_2D_ARRAY, mLowResTexture.id());
             return;
