@@ -50,7 +50,7 @@ struct SingleLeafParams {
       "texture (each billboard's leaves captured from both sides) instead of the cell lookup; "
       "0: every tree does the lookup");
     v("lowres_texels_per_cell", lowResTexelsPerCell, 1, 8,
-      "texels per grid cell side of the low-resolution textures");
+      "texels of the low-resolution textures per cell_size cell side");
     wood.visit(v);
   }
 };
