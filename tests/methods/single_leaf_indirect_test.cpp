@@ -61,17 +61,25 @@ TEST(SingleLeafGrid, EveryLeafHasACellOfItsOwnNearItsCentre) {
   }
 }
 
-TEST(SingleLeafIndirect, ShowsEveryLeafAndKeepsLeafSizeWhateverTheCellSize) {
+// A small tree without wood seen at 128² from 2 radii, 20° up: the image tests' setting.
+class SingleLeafImages : public ::testing::Test {
+ protected:
+  static RenderSettings smallFrame() {
+    RenderSettings settings;
+    settings.width = settings.height = 128;
+    return settings;
+  }
+  const Tree tree = test::smallTree(800, 4);
+  std::unique_ptr<gl::Context> context = test::makeTestContext();
+  gl::Ledger ledger;
+  gl::Device device{ledger};
+  Harness harness{device, smallFrame()};
+  const Camera camera = orbitCamera(tree.bounds, {2.0f, 20.0f, 40.0f}, 40.0f);
+};
+
+TEST_F(SingleLeafImages, ShowsEveryLeafAndKeepsLeafSizeWhateverTheCellSize) {
   // Bake report and image: the same tree at two cell sizes covers about as much of the frame
   // (leaves keep their size), and every leaf is represented.
-  const Tree tree = test::smallTree(800, 4);
-  auto context = test::makeTestContext();
-  gl::Ledger ledger;
-  gl::Device device(ledger);
-  RenderSettings settings;
-  settings.width = settings.height = 128;
-  Harness harness(device, settings);
-  const Camera camera = orbitCamera(tree.bounds, {2.0f, 20.0f, 40.0f}, 40.0f);
   std::vector<long> covered;
   for (const double cellSize : {0.5, 2.0}) {
     auto method = test::bakeAndUpload(device, tree, "single_leaf_indirect",
@@ -130,19 +138,11 @@ TEST(ShaderLodLevels, SplitsTheCloudAtTheTextureThresholdAndKeepsLookupsFirst) {
   }
 }
 
-TEST(SingleLeafIndirect, LowResolutionTextureShowsWhatTheLookupShows) {
+TEST_F(SingleLeafImages, LowResolutionTextureShowsWhatTheLookupShows) {
   // lod_lowres_px above any projected size draws every tree as the texture, captured from the
   // leaves themselves: coverage near the reference's (magnified texels round the leaves off; in
   // development runs 0.79 of it) and no farther from it than the lookup's (0.53: the regular
   // pattern loses leaf overlap), about the lookup's colour, through another path.
-  const Tree tree = test::smallTree(800, 4);
-  auto context = test::makeTestContext();
-  gl::Ledger ledger;
-  gl::Device device(ledger);
-  RenderSettings settings;
-  settings.width = settings.height = 128;
-  Harness harness(device, settings);
-  const Camera camera = orbitCamera(tree.bounds, {2.0f, 20.0f, 40.0f}, 40.0f);
   std::vector<ImageRgba8> images;
   for (const double lowResPixels : {0.0, 100000.0}) {
     auto method =
