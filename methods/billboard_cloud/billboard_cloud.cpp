@@ -37,7 +37,8 @@ struct BillboardCloudParams {
   void visit(Visitor& v) {
     cloud.visit(v);
     v("density", density, 0.01f, 100000.0f,
-      "texels per unit length of billboard side (the memory knob)");
+      "texels per unit length of billboard side, in the tree's own units (a tree modelled in "
+      "centimetres needs a hundredth of a metre tree's density; the memory knob)");
     v("supersample", supersample, 1, 8, "capture samples per texel side");
     v("max_billboard_texels", maxBillboardTexels, 1, 8192, "cap on one billboard's texture side");
     v("mipmaps", mipmaps, "mipmapped atlas (trilinear, coverage-preserving levels)");
