@@ -61,7 +61,8 @@ TEST(SingleLeafGrid, EveryLeafHasACellOfItsOwnNearItsCentre) {
   }
 }
 
-// A small tree without wood seen at 128² from 2 radii, 20° up: the image tests' setting.
+// A small tree seen at 128² from 2 radii, 20° up: the image tests' setting (they turn its
+// wood off).
 class SingleLeafImages : public ::testing::Test {
  protected:
   static RenderSettings smallFrame() {
