@@ -31,7 +31,7 @@ struct BboxParams {
   int minBoxLeaves = 16;
   int spatialLeaves = 200;
   int supersample = 4;
-  std::string compression = "dxt5";
+  std::string compression = "none";
   float textureBudgetMb = 2.0f;
   std::string quadBlend = "facing";
   float facingPower = 1.0f;
@@ -56,7 +56,8 @@ struct BboxParams {
       "spatial hierarchy: at most this many leaves per finest box");
     v("supersample", supersample, 1, 8, "capture samples per texel side");
     v("compression", compression, {"none", "dxt1", "dxt5"},
-      "the box images: uncompressed, BC1 or BC3 (S3TC)");
+      "the box images: uncompressed, BC1 or BC3 (S3TC; four times the boxes in the same "
+      "texture_budget_mb, but decoded in software on CPU renderers)");
     v("texture_budget_mb", textureBudgetMb, 0.0f, 100000.0f,
       "box images, as stored with their mip levels, within this many MB: the finest boxes "
       "(fewest leaves first) lose theirs, so the memory does not grow with the tree (the root "
