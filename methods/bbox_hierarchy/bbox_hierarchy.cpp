@@ -501,59 +501,24 @@ class BboxHierarchy final : public Method {
   }
 
   // Walks one instance's hierarchy (Fig. 4) from its viewer position and adds its matrix to the
-  // lists of what it draws; boxes within the transition band are drawn dissolved together with
-  // the finer level, on complementary pixels.
+  // lists of what it draws; the matrix's unused bottom row carries the entry's dissolve.
   void collectInstance(const Instance& instance, const FrameContext& frame,
                        const std::vector<float>& lodDistance,
                        std::vector<std::vector<glm::mat4>>& boxLists,
-                       std::vector<std::vector<glm::mat4>>& leafLists) const {
+                       std::vector<std::vector<glm::mat4>>& leafLists) {
     const glm::mat4 model = instance.modelMatrix();
     const glm::vec3 viewer =
         glm::vec3(glm::affineInverse(model) * glm::vec4(frame.cameraPosition, 1.0f));
-    const float band = mParams.transition;
-    struct Item {
-      int32_t node;
-      float dissolve;  // inherited from a transitioning ancestor: keep below this threshold
-    };
-    std::vector<Item> stack{{0, 0.0f}};
-    const auto withDissolve = [&](float threshold, bool keepBelow) {
+    walkHierarchy(mHierarchy, lodDistance, viewer, mParams.transition, frame.forcedLevel, mWalk);
+    const auto withDissolve = [&](const WalkEntry& entry) {
       glm::mat4 m = model;
-      m[0][3] = threshold;
-      m[1][3] = keepBelow ? 1.0f : 0.0f;
+      m[0][3] = entry.threshold;
+      m[1][3] = entry.keepBelow ? 1.0f : 0.0f;
       return m;
     };
-    while (!stack.empty()) {
-      const Item item = stack.back();
-      stack.pop_back();
-      const BoxNode& node = mHierarchy.nodes[item.node];
-      if (node.subtreeLeafEnd == node.leafBegin) continue;
-      const bool inherited = item.dissolve > 0.0f;
-      bool descend = true;
-      float childDissolve = item.dissolve;
-      if (node.textured && frame.forcedLevel < 0) {
-        const float distance = glm::length(viewer - node.box.center());
-        const float lod = lodDistance[item.node];
-        if (distance > lod * (1.0f + band)) {
-          boxLists[item.node].push_back(inherited ? withDissolve(item.dissolve, true) : model);
-          descend = false;
-        } else if (distance > lod && !inherited) {
-          // In the band: the box fades in as the viewer moves away, the finer level out.
-          const float hidden = 1.0f - (distance - lod) / (lod * band);
-          boxLists[item.node].push_back(withDissolve(hidden, false));
-          childDissolve = hidden;
-        }
-      } else if (node.textured && node.level >= frame.forcedLevel && frame.forcedLevel >= 0) {
-        boxLists[item.node].push_back(model);
-        descend = false;
-      }
-      if (!descend) continue;
-      if (node.leafEnd > node.leafBegin) {
-        leafLists[item.node].push_back(childDissolve > 0.0f ? withDissolve(childDissolve, true)
-                                                            : model);
-      }
-      for (auto it = node.children.rbegin(); it != node.children.rend(); ++it)
-        stack.push_back({*it, childDissolve});
-    }
+    for (const WalkEntry& entry : mWalk.boxes) boxLists[entry.node].push_back(withDissolve(entry));
+    for (const WalkEntry& entry : mWalk.leafNodes)
+      leafLists[entry.node].push_back(withDissolve(entry));
   }
 
   void uploadMatrices(const std::vector<glm::mat4>& matrices) {
@@ -576,6 +541,7 @@ class BboxHierarchy final : public Method {
   std::vector<int32_t> mTextured;
   std::vector<uint32_t> mBoxFirstIndex;
   std::vector<float> mWorldPerTexel;
+  HierarchyWalk mWalk;                  // one instance's walk, reused across instances
   std::vector<glm::mat3> mPairNormals;  // per node: its quad pairs' normals (facing blend)
   uint64_t mSignature = 0;          // of the boxes the last draw showed as images (popping metric)
   uint64_t mLeafPolygonsDrawn = 0;  // leaves the last draw drew as polygons, all instances

@@ -277,22 +277,47 @@ void keepTexturedBoxes(BoxHierarchy& hierarchy, size_t keep) {
 }
 
 void walkHierarchy(const BoxHierarchy& hierarchy, const std::vector<float>& lodDistance,
-                   const glm::vec3& viewer, HierarchyWalk& walk) {
+                   const glm::vec3& viewer, float transition, int forcedLevel,
+                   HierarchyWalk& walk) {
   walk.boxes.clear();
   walk.leafNodes.clear();
   if (hierarchy.nodes.empty()) return;
-  std::vector<int32_t> stack{0};
+  struct Item {
+    int32_t node;
+    float dissolve;  // inherited from a transitioning ancestor: keep below this threshold
+  };
+  std::vector<Item> stack{{0, 0.0f}};
   while (!stack.empty()) {
-    const int32_t n = stack.back();
+    const Item item = stack.back();
     stack.pop_back();
-    const BoxNode& node = hierarchy.nodes[n];
+    const BoxNode& node = hierarchy.nodes[item.node];
     if (node.subtreeLeafEnd == node.leafBegin) continue;  // nothing to draw below
-    if (node.textured && glm::length(viewer - node.box.center()) > lodDistance[n]) {
-      walk.boxes.push_back(n);
+    const bool inherited = item.dissolve > 0.0f;
+    const WalkEntry inheritedEntry{item.node, item.dissolve, true};
+    float childDissolve = item.dissolve;
+    if (node.textured && forcedLevel < 0) {
+      const float distance = glm::length(viewer - node.box.center());
+      const float lod = lodDistance[item.node];
+      if (distance > lod * (1.0f + transition)) {
+        walk.boxes.push_back(inherited ? inheritedEntry : WalkEntry{item.node});
+        continue;
+      }
+      if (distance > lod && !inherited) {
+        // In the band: the box fades in as the viewer moves away, the finer level out.
+        const float hidden = 1.0f - (distance - lod) / (lod * transition);
+        walk.boxes.push_back({item.node, hidden, false});
+        childDissolve = hidden;
+      }
+    } else if (node.textured && forcedLevel >= 0 && node.level >= forcedLevel) {
+      walk.boxes.push_back({item.node});
       continue;
     }
-    if (node.leafEnd > node.leafBegin) walk.leafNodes.push_back(n);
-    for (auto it = node.children.rbegin(); it != node.children.rend(); ++it) stack.push_back(*it);
+    if (node.leafEnd > node.leafBegin) {
+      walk.leafNodes.push_back(childDissolve > 0.0f ? WalkEntry{item.node, childDissolve, true}
+                                                    : WalkEntry{item.node});
+    }
+    for (auto it = node.children.rbegin(); it != node.children.rend(); ++it)
+      stack.push_back({*it, childDissolve});
   }
 }
 

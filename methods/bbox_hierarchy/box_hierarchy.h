@@ -56,14 +56,28 @@ std::vector<int32_t> texturedCoarseToFine(const BoxHierarchy& hierarchy);
 // per branch: with one per branch texture memory would grow with the tree.
 void keepTexturedBoxes(BoxHierarchy& hierarchy, size_t keep);
 
-// The walk of Fig. 4: a textured box whose distance to the viewer exceeds its LoD distance is
-// drawn as its images and its subtree skipped; otherwise its own leaves are drawn as polygons
-// and its children visited. Untextured boxes are always opened.
+// The walk of Fig. 4 from one viewer (in the tree's frame): a textured box whose distance to
+// the viewer exceeds its LoD distance d is drawn as its images and its subtree skipped;
+// otherwise its own leaves are drawn as polygons and its children visited. Untextured boxes are
+// always opened. Within the band (d, d·(1 + transition)] a box is drawn dissolved together with
+// the finer level, on complementary pixels of one dither: the box keeps the dither values at or
+// above `threshold`, everything below it keeps those under it (nested transitions inside a
+// dissolving subtree switch hard). forcedLevel >= 0 draws every textured box of that level or
+// coarser that the walk meets as its images, whatever the distance.
+struct WalkEntry {
+  int32_t node = 0;
+  float threshold = 0.0f;  // 0: drawn whole
+  bool keepBelow = false;  // keep dither values below `threshold` (else at or above it)
+  // The share of pixels drawn: 1 whole, else the dither's range kept.
+  float share() const {
+    return threshold <= 0.0f ? 1.0f : keepBelow ? threshold : 1.0f - threshold;
+  }
+};
 struct HierarchyWalk {
-  std::vector<int32_t> boxes;      // nodes drawn as images
-  std::vector<int32_t> leafNodes;  // nodes whose own leaves are drawn as polygons
+  std::vector<WalkEntry> boxes;      // nodes drawn as images
+  std::vector<WalkEntry> leafNodes;  // nodes whose own leaves are drawn as polygons
 };
 void walkHierarchy(const BoxHierarchy& hierarchy, const std::vector<float>& lodDistance,
-                   const glm::vec3& viewer, HierarchyWalk& walk);
+                   const glm::vec3& viewer, float transition, int forcedLevel, HierarchyWalk& walk);
 
 }  // namespace canopy

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <set>
@@ -142,6 +143,22 @@ TEST(BoxHierarchy, KeepingFewerTexturedBoxesDropsTheFinestFirst) {
   EXPECT_EQ(texturedCoarseToFine(h).size(), 1u);
 }
 
+// Each leaf's drawn share summed over the walk's entries: a box counts for every leaf of its
+// subtree, a leaf node for its own leaves; a dissolved entry for the dither range it keeps.
+std::vector<float> drawnShares(const Tree& tree, const BoxHierarchy& h, const HierarchyWalk& walk) {
+  std::vector<float> drawn(tree.leaves.size(), 0.0f);
+  for (const WalkEntry& entry : walk.boxes) {
+    EXPECT_TRUE(h.nodes[entry.node].textured);
+    for (uint32_t i = h.nodes[entry.node].leafBegin; i < h.nodes[entry.node].subtreeLeafEnd; ++i)
+      drawn[h.leafOrder[i]] += entry.share();
+  }
+  for (const WalkEntry& entry : walk.leafNodes) {
+    for (uint32_t i = h.nodes[entry.node].leafBegin; i < h.nodes[entry.node].leafEnd; ++i)
+      drawn[h.leafOrder[i]] += entry.share();
+  }
+  return drawn;
+}
+
 TEST(BoxHierarchy, TheWalkDrawsEveryLeafExactlyOnceAtAnyDistance) {
   const Tree tree = test::smallTree(1200, 3);
   for (BoxHierarchy h : hierarchiesOf(tree)) {
@@ -152,26 +169,59 @@ TEST(BoxHierarchy, TheWalkDrawsEveryLeafExactlyOnceAtAnyDistance) {
       const glm::vec3 viewer = tree.bounds.center() +
                                glm::vec3(0.3f, 0.2f, 1.0f) * distance * tree.boundingSphereRadius();
       HierarchyWalk walk;
-      walkHierarchy(h, lod, viewer, walk);
-      std::vector<int> drawn(tree.leaves.size(), 0);
-      for (int32_t n : walk.boxes) {
-        EXPECT_TRUE(h.nodes[n].textured);
-        for (uint32_t i = h.nodes[n].leafBegin; i < h.nodes[n].subtreeLeafEnd; ++i)
-          ++drawn[h.leafOrder[i]];
-      }
-      for (int32_t n : walk.leafNodes) {
-        for (uint32_t i = h.nodes[n].leafBegin; i < h.nodes[n].leafEnd; ++i)
-          ++drawn[h.leafOrder[i]];
-      }
+      walkHierarchy(h, lod, viewer, 0.0f, -1, walk);
+      const std::vector<float> drawn = drawnShares(tree, h, walk);
       for (size_t l = 0; l < drawn.size(); ++l)
-        ASSERT_EQ(drawn[l], 1) << h.source << " distance " << distance << " leaf " << l;
+        ASSERT_EQ(drawn[l], 1.0f) << h.source << " distance " << distance << " leaf " << l;
       if (distance >= 1000.0f) {
-        EXPECT_EQ(walk.boxes, std::vector<int32_t>{0}) << "far away: the root's images only";
+        ASSERT_EQ(walk.boxes.size(), 1u);
+        EXPECT_EQ(walk.boxes[0].node, 0) << "far away: the root's images only";
       }
       if (distance == 0.0f) {
         EXPECT_FALSE(walk.leafNodes.empty()) << "inside the tree: nearby leaves as polygons";
       }
     }
+  }
+}
+
+// With a transition band, boxes in it are drawn on part of the pixels and their finer level on
+// the rest: every leaf's shares still add up to one, and some distances do dissolve.
+TEST(BoxHierarchy, TransitionBandsSplitEachLeafsPixelsBetweenTwoLevels) {
+  const Tree tree = test::smallTree(1200, 3);
+  for (BoxHierarchy h : hierarchiesOf(tree)) {
+    pruneByVolumeRatio(h, 0.05f);
+    std::vector<float> lod(h.nodes.size());
+    for (size_t n = 0; n < lod.size(); ++n) lod[n] = 3.0f * glm::length(h.nodes[n].box.extent());
+    int dissolvedWalks = 0;
+    for (int step = 0; step <= 60; ++step) {
+      const float distance = 0.25f * float(step);
+      const glm::vec3 viewer = tree.bounds.center() +
+                               glm::vec3(0.3f, 0.2f, 1.0f) * distance * tree.boundingSphereRadius();
+      HierarchyWalk walk;
+      walkHierarchy(h, lod, viewer, 0.5f, -1, walk);
+      const std::vector<float> drawn = drawnShares(tree, h, walk);
+      for (size_t l = 0; l < drawn.size(); ++l)
+        ASSERT_NEAR(drawn[l], 1.0f, 1e-5f) << h.source << " distance " << distance << " leaf " << l;
+      const auto dissolved = [](const WalkEntry& e) { return e.threshold > 0.0f; };
+      if (std::any_of(walk.boxes.begin(), walk.boxes.end(), dissolved)) ++dissolvedWalks;
+    }
+    EXPECT_GT(dissolvedWalks, 0) << h.source << ": no distance fell in a transition band";
+  }
+}
+
+// Forcing a level draws the textured boxes of that level (or coarser, where the branch ends
+// earlier) as images, whatever the distance, and still every leaf once.
+TEST(BoxHierarchy, AForcedLevelDrawsThatLevelsBoxesAtAnyDistance) {
+  const Tree tree = test::smallTree(1200, 3);
+  for (BoxHierarchy h : hierarchiesOf(tree)) {
+    pruneByVolumeRatio(h, 0.05f);
+    const std::vector<float> lod(h.nodes.size(), 1e9f);  // never far enough on its own
+    HierarchyWalk walk;
+    walkHierarchy(h, lod, tree.bounds.center(), 0.25f, 1, walk);
+    const std::vector<float> drawn = drawnShares(tree, h, walk);
+    for (size_t l = 0; l < drawn.size(); ++l)
+      ASSERT_EQ(drawn[l], 1.0f) << h.source << " leaf " << l;
+    for (const WalkEntry& entry : walk.boxes) EXPECT_GE(h.nodes[entry.node].level, 1);
   }
 }
 
