@@ -159,17 +159,24 @@ std::vector<float> drawnShares(const Tree& tree, const BoxHierarchy& h, const Hi
   return drawn;
 }
 
+// The walk from a viewer `distance` bounding radii from the tree's centre along one oblique
+// direction, each box's LoD distance three times its diagonal.
+HierarchyWalk walkFrom(const Tree& tree, const BoxHierarchy& h, float distance, float transition) {
+  std::vector<float> lod(h.nodes.size());
+  for (size_t n = 0; n < lod.size(); ++n) lod[n] = 3.0f * glm::length(h.nodes[n].box.extent());
+  const glm::vec3 viewer =
+      tree.bounds.center() + glm::vec3(0.3f, 0.2f, 1.0f) * distance * tree.boundingSphereRadius();
+  HierarchyWalk walk;
+  walkHierarchy(h, lod, viewer, transition, -1, walk);
+  return walk;
+}
+
 TEST(BoxHierarchy, TheWalkDrawsEveryLeafExactlyOnceAtAnyDistance) {
   const Tree tree = test::smallTree(1200, 3);
   for (BoxHierarchy h : hierarchiesOf(tree)) {
     pruneByVolumeRatio(h, 0.05f);
-    std::vector<float> lod(h.nodes.size());
-    for (size_t n = 0; n < lod.size(); ++n) lod[n] = 3.0f * glm::length(h.nodes[n].box.extent());
     for (float distance : {0.0f, 0.5f, 2.0f, 5.0f, 10.0f, 30.0f, 1000.0f}) {
-      const glm::vec3 viewer = tree.bounds.center() +
-                               glm::vec3(0.3f, 0.2f, 1.0f) * distance * tree.boundingSphereRadius();
-      HierarchyWalk walk;
-      walkHierarchy(h, lod, viewer, 0.0f, -1, walk);
+      const HierarchyWalk walk = walkFrom(tree, h, distance, 0.0f);
       const std::vector<float> drawn = drawnShares(tree, h, walk);
       for (size_t l = 0; l < drawn.size(); ++l)
         ASSERT_EQ(drawn[l], 1.0f) << h.source << " distance " << distance << " leaf " << l;
@@ -190,15 +197,10 @@ TEST(BoxHierarchy, TransitionBandsSplitEachLeafsPixelsBetweenTwoLevels) {
   const Tree tree = test::smallTree(1200, 3);
   for (BoxHierarchy h : hierarchiesOf(tree)) {
     pruneByVolumeRatio(h, 0.05f);
-    std::vector<float> lod(h.nodes.size());
-    for (size_t n = 0; n < lod.size(); ++n) lod[n] = 3.0f * glm::length(h.nodes[n].box.extent());
     int dissolvedWalks = 0;
     for (int step = 0; step <= 60; ++step) {
       const float distance = 0.25f * float(step);
-      const glm::vec3 viewer = tree.bounds.center() +
-                               glm::vec3(0.3f, 0.2f, 1.0f) * distance * tree.boundingSphereRadius();
-      HierarchyWalk walk;
-      walkHierarchy(h, lod, viewer, 0.5f, -1, walk);
+      const HierarchyWalk walk = walkFrom(tree, h, distance, 0.5f);
       const std::vector<float> drawn = drawnShares(tree, h, walk);
       for (size_t l = 0; l < drawn.size(); ++l)
         ASSERT_NEAR(drawn[l], 1.0f, 1e-5f) << h.source << " distance " << distance << " leaf " << l;
