@@ -62,8 +62,9 @@ void keepTexturedBoxes(BoxHierarchy& hierarchy, size_t keep);
 // always opened. Within the band (d, d·(1 + transition)] a box is drawn dissolved together with
 // the finer level, on complementary pixels of one dither: the box keeps the dither values at or
 // above `threshold`, everything below it keeps those under it (nested transitions inside a
-// dissolving subtree switch hard). forcedLevel >= 0 draws every textured box of that level or
-// coarser that the walk meets as its images, whatever the distance.
+// dissolving subtree switch hard). forcedLevel >= 0 draws, whatever the distance, the first
+// textured box at that level or finer on each branch as its images (finer where the box of that
+// level has none).
 struct WalkEntry {
   int32_t node = 0;
   float threshold = 0.0f;  // 0: drawn whole

@@ -211,8 +211,8 @@ TEST(BoxHierarchy, TransitionBandsSplitEachLeafsPixelsBetweenTwoLevels) {
   }
 }
 
-// Forcing a level draws the textured boxes of that level (or coarser, where the branch ends
-// earlier) as images, whatever the distance, and still every leaf once.
+// Forcing a level draws the textured boxes of that level (or finer, where that level's box has
+// no images) as images, whatever the distance, and still every leaf once.
 TEST(BoxHierarchy, AForcedLevelDrawsThatLevelsBoxesAtAnyDistance) {
   const Tree tree = test::smallTree(1200, 3);
   for (BoxHierarchy h : hierarchiesOf(tree)) {
