@@ -149,6 +149,7 @@ class BillboardCloudMethod final : public Method {
     mProgram.set("uAtlas", 0);
     mProgram.set("uBackLayer", float(mAtlas.size() - 1));
     mProgram.set("uBinaryAlpha", mParams.compression == "dxt1" ? 1 : 0);
+    mProgram.set("uAggregateCoverage", 0);
     // The lit variant declares the occlusion sampler too: a unit of its own (a 2D and an array
     // sampler on one unit is an invalid draw), unused as uHasOcclusion is 0.
     mProgram.set("uOcclusion", 1);

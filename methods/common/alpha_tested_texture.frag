@@ -1,8 +1,8 @@
 #version 430 core
 // A textured billboard (the classic billboard cloud, the multi-layer method's far level): alpha
-// test at 0.5 on the captured coverage, albedo or two-sided Lambert with the plane normal. Layer
-// 0 holds what the billboard's front side sees, layer uBackLayer what its back side sees (the
-// same plane points, so the same uv; 0 when only the front was captured).
+// test on the captured coverage (coverage_test.glsl), albedo or two-sided Lambert with the plane
+// normal. Layer 0 holds what the billboard's front side sees, layer uBackLayer what its back side
+// sees (the same plane points, so the same uv; 0 when only the front was captured).
 in vec3 vNormal;
 in vec2 vUv;
 
@@ -14,13 +14,17 @@ uniform float uBackLayer;
 uniform int uBinaryAlpha;
 uniform sampler2D uOcclusion;  // ambient occlusion over the same atlas (R), when uHasOcclusion
 uniform int uHasOcclusion;
+// 1 when the atlas holds aggregate coverage (the indirect methods' low-resolution textures, a
+// cell's leaves per texel), 0 when it holds leaf outlines (the classic cloud).
+uniform int uAggregateCoverage;
+#include "methods/common/coverage_test.glsl"
 #include "methods/common/lighting.glsl"
 
 out vec4 outColor;
 
 void main() {
   vec4 texel = texture(uAtlas, vec3(vUv, gl_FrontFacing ? 0.0 : uBackLayer));
-  if (texel.a < 0.5) discard;
+  if (texel.a < coverageThreshold(uAggregateCoverage != 0)) discard;
   vec3 color = uBinaryAlpha != 0 ? texel.rgb / texel.a : texel.rgb;
   if (uLit != 0) {
     vec3 normal = normalize(gl_FrontFacing ? vNormal : -vNormal);

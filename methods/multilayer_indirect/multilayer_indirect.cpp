@@ -369,6 +369,7 @@ class MultilayerIndirect final : public Method {
             program.set("uAtlas", 0);
             program.set("uBackLayer", 1.0f);
             program.set("uBinaryAlpha", mParams.compression == "dxt1" ? 1 : 0);
+            program.set("uAggregateCoverage", 1);
             program.set("uOcclusion", 1);
             program.set("uHasOcclusion", mLowResOcclusionTexture.id() ? 1 : 0);
             g.ActiveTexture(GL_TEXTURE1);

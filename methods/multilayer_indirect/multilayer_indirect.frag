@@ -42,6 +42,7 @@ uniform float uMaxSlope;     // parallax: steeper rays are bent to this in-plane
 // BC1 images: divide the filtered colour by the filtered alpha (transparent texels are black).
 uniform int uLeavesBinaryAlpha;
 uniform int uLowResBinaryAlpha;
+#include "methods/common/coverage_test.glsl"
 #include "methods/common/lighting.glsl"
 #ifndef CANOPY_LIT
 in vec3 vWorldPosition;  // lighting.glsl declares it for lit frames
@@ -157,6 +158,7 @@ void main() {
     vec2 uv = st * 0.5 + 0.5;
     vec4 texel = textureGrad(uLeaves, vec3(uv, 2.0 * record.image + (front ? 0.0 : 1.0)),
                              0.5 * (inverse * planeDx), 0.5 * (inverse * planeDy));
+    // One leaf's image, tested at 0.5 as the reference tests its leaf cards (coverage_test.glsl).
     if (texel.a < 0.5) continue;
     if (uLeavesBinaryAlpha != 0) texel.rgb /= texel.a;
 #if PARALLAX
@@ -183,7 +185,7 @@ void main() {
     float coverage = texel.a;
     if (uLowResRestOnly != 0)
       coverage = 1.0 - pow(max(1.0 - texel.a, 0.0), float(listLength - budget) / float(listLength));
-    if (coverage >= 0.5) {
+    if (coverage >= coverageThreshold(true)) {
       if (uLowResBinaryAlpha != 0) texel.rgb /= texel.a;
 #if PARALLAX
       gl_FragDepth = gl_FragCoord.z;

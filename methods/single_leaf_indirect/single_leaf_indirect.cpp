@@ -294,6 +294,7 @@ class SingleLeafIndirect final : public Method {
             mTextureProgram.set("uAtlas", 0);
             mTextureProgram.set("uBackLayer", 1.0f);
             mTextureProgram.set("uBinaryAlpha", 0);
+            mTextureProgram.set("uAggregateCoverage", 1);
             mTextureProgram.set("uHasOcclusion", 0);
             mTextureProgram.set("uOcclusion", 1);  // unused; off the atlas' unit
             g.ActiveTexture(GL_TEXTURE0);

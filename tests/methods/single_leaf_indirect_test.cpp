@@ -80,12 +80,15 @@ class SingleLeafImages : public ::testing::Test {
 
 TEST_F(SingleLeafImages, ShowsEveryLeafAndKeepsLeafSizeWhateverTheCellSize) {
   // Bake report and image: the same tree at two cell sizes covers about as much of the frame
-  // (leaves keep their size), and every leaf is represented.
+  // (leaves keep their size), and every leaf is represented. The cell lookup, which draws the
+  // leaves: at 128² the tree spans fewer pixels than lod_lowres_px, whose texture would draw
+  // each cell's coverage instead (hashed, so a coarser cell grid covers more).
   std::vector<long> covered;
   for (const double cellSize : {0.5, 2.0}) {
-    auto method = test::bakeAndUpload(device, tree, "single_leaf_indirect",
-                                      {{"cell_size", cellSize}, {"lod", false}, {"wood", false}},
-                                      Shading::kUnlit, "cells " + std::to_string(cellSize));
+    auto method = test::bakeAndUpload(
+        device, tree, "single_leaf_indirect",
+        {{"cell_size", cellSize}, {"lod", false}, {"lod_lowres_px", 0}, {"wood", false}},
+        Shading::kUnlit, "cells " + std::to_string(cellSize));
     EXPECT_EQ(method->bakeReport().at("leaves_represented").get<size_t>(), tree.leaves.size());
     const ImageRgba8 image = harness.render(*method, camera);
     long count = 0;
