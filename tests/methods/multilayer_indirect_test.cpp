@@ -442,6 +442,33 @@ TEST(MultilayerIndirect, LowResolutionAmbientOcclusionDarkensOnlyLitFarTrees) {
   EXPECT_LT(occluded, plain - 1.0) << "occluded leaves lose ambient light";
 }
 
+TEST(MultilayerIndirect, FarLevelKeepsASparseCrownsCoverage) {
+  // The far level is the low-resolution texture alone, one texel a hash cell: on a sparse crown
+  // most texels are partly covered, and an alpha test at 0.5 dropped them (the crown thinned to
+  // its branches). The hashed threshold keeps each texel's coverage in expectation, so the
+  // crown's total alpha (2× supersampled, partial pixels count partly) stays near the reference's.
+  LSystemTreeParams sparse = treePreset("sparse");
+  sparse.leafTextureSize = 64;
+  const Tree tree = generateTree(sparse, 3);
+  VariantBench bench(128);
+  const Camera camera = orbitCamera(tree.bounds, {6.0f, 20.0f, 40.0f}, 40.0f);
+  auto impostor = bench.bake(
+      tree, {{"lod_near_px", 100000.0}, {"lod_far_px", 99999.0}, {"wood", false}}, "far");
+  auto reference = test::bakeAndUpload(bench.device, tree, "polygonal", {{"wood", false}},
+                                       Shading::kUnlit, "reference");
+  const auto totalAlpha = [](const ImageRgba8& image) {
+    double sum = 0.0;
+    for (size_t i = 3; i < image.pixels.size(); i += 4) sum += image.pixels[i] / 255.0;
+    return sum;
+  };
+  const double referenceAlpha = totalAlpha(bench.harness.render(*reference, camera));
+  ASSERT_GT(referenceAlpha, 100.0) << "the reference shows the crown";
+  const double ratio = totalAlpha(bench.harness.render(*impostor, camera)) / referenceAlpha;
+  // Measured: 0.82 of the reference's alpha hashed, 0.07 tested at 0.5.
+  EXPECT_GT(ratio, 0.6);
+  EXPECT_LT(ratio, 1.25);
+}
+
 TEST(MultilayerIndirect, ShaderLodWithAllEntriesEqualsFullEvaluation) {
   const Tree tree = test::smallTree(800, 4);
   const nlohmann::json base = {{"clusters", 20}, {"lod", false}, {"wood", false}};
