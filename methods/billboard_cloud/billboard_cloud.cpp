@@ -32,6 +32,7 @@ struct BillboardCloudParams {
   std::string compression = "none";
   bool backCapture = true;
   float woodCapturePixels = 0.0f;
+  std::string alphaTest = "fixed";
 
   template <class Visitor>
   void visit(Visitor& v) {
@@ -53,6 +54,11 @@ struct BillboardCloudParams {
       "many output pixels of one of their billboards, measured at the largest projected size "
       "each cloud is drawn at; trees drawn with them draw only the rest of the wood as geometry "
       "(0: images of leaves only; needs lod)");
+    v("alpha_test", alphaTest, {"fixed", "hashed"},
+      "the atlas' alpha test: at 0.5 everywhere, as the reference tests its leaf cards; or, "
+      "where the atlas is minified (its mip levels average several texels), against a threshold "
+      "hashed per pixel and primitive that keeps the averaged coverage in expectation (0.5 where "
+      "magnified)");
   }
 };
 
@@ -149,7 +155,7 @@ class BillboardCloudMethod final : public Method {
     mProgram.set("uAtlas", 0);
     mProgram.set("uBackLayer", float(mAtlas.size() - 1));
     mProgram.set("uBinaryAlpha", mParams.compression == "dxt1" ? 1 : 0);
-    mProgram.set("uAggregateCoverage", 0);
+    mProgram.set("uAggregateCoverage", mParams.alphaTest == "hashed" ? 2 : 0);
     // The lit variant declares the occlusion sampler too: a unit of its own (a 2D and an array
     // sampler on one unit is an invalid draw), unused as uHasOcclusion is 0.
     mProgram.set("uOcclusion", 1);

@@ -15,7 +15,8 @@ uniform int uBinaryAlpha;
 uniform sampler2D uOcclusion;  // ambient occlusion over the same atlas (R), when uHasOcclusion
 uniform int uHasOcclusion;
 // 1 when the atlas holds aggregate coverage (the indirect methods' low-resolution textures, a
-// cell's leaves per texel), 0 when it holds leaf outlines (the classic cloud).
+// cell's leaves per texel), 0 when it holds leaf outlines (the classic cloud), 2 when it holds
+// leaf outlines tested as aggregate coverage where minified (the classic cloud's hashed test).
 uniform int uAggregateCoverage;
 #include "methods/common/coverage_test.glsl"
 #include "methods/common/lighting.glsl"
@@ -24,7 +25,10 @@ out vec4 outColor;
 
 void main() {
   vec4 texel = texture(uAtlas, vec3(vUv, gl_FrontFacing ? 0.0 : uBackLayer));
-  if (texel.a < coverageThreshold(uAggregateCoverage != 0)) discard;
+  float threshold = uAggregateCoverage == 2
+                        ? minifiedCoverageThreshold(textureQueryLod(uAtlas, vUv).y)
+                        : coverageThreshold(uAggregateCoverage != 0);
+  if (texel.a < threshold) discard;
   vec3 color = uBinaryAlpha != 0 ? texel.rgb / texel.a : texel.rgb;
   if (uLit != 0) {
     vec3 normal = normalize(gl_FrontFacing ? vNormal : -vNormal);

@@ -25,9 +25,17 @@ uvec3 coverageHash(uvec3 v) {
 // as the reference tests its leaf cards, so that the two thin out alike where leaves are minified:
 // hashing the walks' leaf images measured 1.7 to 9 dB worse at 1.5 and 4 radii. The classic atlas
 // hashed from its first mip level on measured 0.1 to 0.5 dB better at 12 radii, but its captured
-// wood then covered less of what the mesh covers (docs/METHODS.md, "Hashed coverage").
+// wood then covered less of what the mesh covers (docs/METHODS.md, "Hashed coverage"); it is the
+// classic cloud's `alpha_test: "hashed"` (minifiedCoverageThreshold).
 float coverageThreshold(bool aggregate) {
   if (!aggregate) return 0.5;
   uvec3 key = uvec3(uvec2(gl_FragCoord.xy), uint(gl_PrimitiveID));
   return (float(coverageHash(key).x >> 8u) + 0.5) / 16777216.0;
+}
+
+// Leaf outlines where a texel is magnified, aggregate coverage where the mip levels average
+// several texels: the threshold moves from 0.5 to the hashed one as the sampled level of detail
+// goes from 0 to 1, so no line marks the switch.
+float minifiedCoverageThreshold(float lod) {
+  return mix(0.5, coverageThreshold(true), clamp(lod, 0.0, 1.0));
 }
