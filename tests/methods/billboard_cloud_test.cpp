@@ -9,7 +9,6 @@
 
 #include "bench/harness.h"
 #include "common/error.h"
-#include "common/lsystem.h"
 #include "common/metrics.h"
 #include "common/random.h"
 #include "common/views.h"
@@ -377,9 +376,7 @@ TEST(WoodCapture, NearestPlaneWithinTheBoundHoldsTheTriangleAndTheImageShowsIt) 
 // threshold hashed per pixel and primitive keeps that averaged coverage in expectation instead of
 // making it all or nothing at 0.5; where it is magnified the test stays at 0.5.
 TEST(BillboardCloudAlphaTest, HashedFollowsTheCrownWhereMinifiedAndKeepsOutlinesWhereMagnified) {
-  LSystemTreeParams sparse = treePreset("sparse");
-  sparse.leafTextureSize = 64;
-  const Tree tree = generateTree(sparse, 3);
+  const Tree tree = test::smallTree(1000, 3);  // the sparse preset's own leaf count
   auto context = test::makeTestContext();
   gl::Ledger ledger;
   gl::Device device(ledger);

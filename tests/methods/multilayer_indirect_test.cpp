@@ -447,9 +447,7 @@ TEST(MultilayerIndirect, FarLevelKeepsASparseCrownsCoverage) {
   // most texels are partly covered, and an alpha test at 0.5 dropped them (the crown thinned to
   // its branches). The hashed threshold keeps each texel's coverage in expectation, so the
   // crown's total alpha (2× supersampled, partial pixels count partly) stays near the reference's.
-  LSystemTreeParams sparse = treePreset("sparse");
-  sparse.leafTextureSize = 64;
-  const Tree tree = generateTree(sparse, 3);
+  const Tree tree = test::smallTree(1000, 3);  // the sparse preset's own leaf count
   VariantBench bench(128);
   const Camera camera = orbitCamera(tree.bounds, {6.0f, 20.0f, 40.0f}, 40.0f);
   auto impostor = bench.bake(
