@@ -32,6 +32,7 @@ struct BillboardCloudParams {
   std::string compression = "none";
   bool backCapture = true;
   float woodCapturePixels = 0.0f;
+  float woodCaptureFarPixels = 0.0f;
   std::string alphaTest = "fixed";
 
   template <class Visitor>
@@ -54,6 +55,11 @@ struct BillboardCloudParams {
       "many output pixels of one of their billboards, measured at the largest projected size "
       "each cloud is drawn at; trees drawn with them draw only the rest of the wood as geometry "
       "(0: images of leaves only; needs lod)");
+    v("wood_capture_far_px", woodCaptureFarPixels, 0.0f, 100.0f,
+      "the far cloud's own bound instead (0: wood_capture_px's): its images hold the wood within "
+      "this many output pixels of its billboards at its largest projected size (lod_far_px), "
+      "and trees drawn with it draw only the rest; the middle cloud keeps what wood_capture_px "
+      "gives both clouds (at least wood_capture_px; needs lod)");
     v("alpha_test", alphaTest, {"fixed", "hashed"},
       "the atlas' alpha test: at 0.5 everywhere, as the reference tests its leaf cards; or, "
       "where the atlas is minified (its mip levels average several texels), against a threshold "
@@ -69,6 +75,12 @@ class BillboardCloudMethod final : public Method {
  public:
   explicit BillboardCloudMethod(BillboardCloudParams params) : mParams(std::move(params)) {
     mParams.cloud.resolve("billboard_cloud");
+    if (mParams.woodCaptureFarPixels > 0.0f &&
+        (!mParams.cloud.lod || mParams.woodCaptureFarPixels < mParams.woodCapturePixels))
+      throwInputError(
+          "billboard_cloud: parameter 'wood_capture_far_px' ({}) must be at least "
+          "'wood_capture_px' ({}) with 'lod' on, or be 0",
+          mParams.woodCaptureFarPixels, mParams.woodCapturePixels);
   }
 
   void bake(const Tree& tree, BakeContext& ctx) override {
@@ -94,9 +106,10 @@ class BillboardCloudMethod final : public Method {
     // The middle and far clouds' images hold the wood trees drawn with them do not draw.
     const WoodInImages woodInImages = captureWoodInImages(
         tree, clouds, 1, {mParams.cloud.lodNearPixels, mParams.cloud.lodFarPixels},
-        mParams.wood.draw ? mParams.woodCapturePixels : 0.0f);
+        mParams.wood.draw ? mParams.woodCapturePixels : 0.0f,
+        mParams.wood.draw ? mParams.woodCaptureFarPixels : 0.0f);
     mReport["wood_captured"] = woodInImages.report;
-    mWood.bake(tree, mParams.wood.levels(), woodInImages.captured, mParams.cloud.lodNearPixels);
+    mWood.bake(tree, mParams.wood.levels(), woodInImages.captured);
     const AtlasLayout preview = packAtlas(sizes, kAtlasPadding, kAtlasAlignment);
     if (preview.width > kMaxAtlas || preview.height > kMaxAtlas) {
       throwInputError(

@@ -67,8 +67,7 @@ void sortByMaterial(const WoodMesh& wood, std::vector<uint32_t>& indices,
 
 }  // namespace
 
-void WoodRenderer::bake(const Tree& tree, bool levels, const std::vector<bool>& captured,
-                        float capturedBelowPixels) {
+void WoodRenderer::bake(const Tree& tree, bool levels, const std::vector<CapturedWood>& captured) {
   const WoodMesh& wood = tree.wood;
   mVertices.clear();
   for (size_t i = 0; i < wood.positions.size(); ++i)
@@ -83,14 +82,16 @@ void WoodRenderer::bake(const Tree& tree, bool levels, const std::vector<bool>& 
   std::vector<WoodRange> ranges;
   sortByMaterial(wood, indices, ranges);
   mLevels = buildWoodLevels(wood.positions, indices, ranges, finest, coarsest);
-  if (!captured.empty()) {
+  // Every residual chain filters the full chain alone (levels 0 to here).
+  const WoodLevels full = mLevels;
+  for (const CapturedWood& images : captured) {
     // A vertex is in the images when every triangle around it is.
     std::vector<bool> capturedVertices(wood.positions.size(), true);
     for (size_t t = 0; t < wood.triangleCount(); ++t) {
-      if (captured[t]) continue;
+      if (images.triangles[t]) continue;
       for (int k = 0; k < 3; ++k) capturedVertices[wood.indices[t * 3 + k]] = false;
     }
-    appendResidualLevels(mLevels, residualLevels(mLevels, capturedVertices), capturedBelowPixels);
+    appendResidualLevels(mLevels, residualLevels(full, capturedVertices), images.belowPixels);
   }
   mMaterials = tree.woodMaterials;
   mTextures = tree.woodTextures;
@@ -195,7 +196,7 @@ nlohmann::json WoodRenderer::describeLevels() const {
   for (size_t level = 0; level < mLevels.levels(); ++level)
     levels.push_back({{"triangles", mLevels.triangles(level)},
                       {"error", mLevels.errors[level]},
-                      {"residual", mLevels.hasResidual() && level >= mLevels.residualFrom}});
+                      {"residual", mLevels.isResidual(level)}});
   return levels;
 }
 
@@ -231,13 +232,23 @@ struct WoodLevelFields {
   }
 };
 
+// One residual chain: its first level and the projected radius below which it is drawn.
+struct ResidualChainFields {
+  size_t from = 0;
+  float belowPixels = 0.0f;
+  template <class V>
+  void visit(V& v) {
+    v("from", from);
+    v("below_px", belowPixels);
+  }
+};
+
 struct WoodFields {
   struct Wood {
     std::vector<WoodMaterialFields> materials;
     size_t textures = 0;
     std::vector<WoodLevelFields> levels;
-    size_t residualFrom = 0;           // WoodLevels::residualFrom
-    float residualBelowPixels = 0.0f;  // WoodLevels::residualBelowPixels
+    std::vector<ResidualChainFields> residualChains;  // WoodLevels::residualChains
     std::array<float, 3> boundsMin{}, boundsMax{};
     bool solid = false;
     template <class V>
@@ -246,8 +257,7 @@ struct WoodFields {
       v("solid", solid);
       v("textures", textures);
       v("levels", levels);
-      v("residual_from", residualFrom);
-      v("residual_below_px", residualBelowPixels);
+      v("residual_chains", residualChains);
       v("bounds_min", boundsMin);
       v("bounds_max", boundsMax);
     }
@@ -268,8 +278,8 @@ void WoodRenderer::save(AssetFolder& asset) const {
   for (size_t level = 0; level < mLevels.levels(); ++level) {
     fields.wood.levels.push_back({mLevels.rangesPerLevel[level], mLevels.errors[level]});
   }
-  fields.wood.residualFrom = mLevels.residualFrom;
-  fields.wood.residualBelowPixels = mLevels.residualBelowPixels;
+  for (const ResidualChain& chain : mLevels.residualChains)
+    fields.wood.residualChains.push_back({chain.from, chain.belowPixels});
   fields.wood.boundsMin = {mBounds.min.x, mBounds.min.y, mBounds.min.z};
   fields.wood.boundsMax = {mBounds.max.x, mBounds.max.y, mBounds.max.z};
   for (const WoodMaterial& m : mMaterials) {
@@ -294,8 +304,8 @@ void WoodRenderer::load(AssetFolder& asset) {
     mLevels.rangesPerLevel.push_back(level.ranges);
     mLevels.errors.push_back(level.error);
   }
-  mLevels.residualFrom = fields.wood.residualFrom;
-  mLevels.residualBelowPixels = fields.wood.residualBelowPixels;
+  for (const ResidualChainFields& chain : fields.wood.residualChains)
+    mLevels.residualChains.push_back({chain.from, chain.belowPixels});
   const auto& lo = fields.wood.boundsMin;
   const auto& hi = fields.wood.boundsMax;
   mBounds = {glm::vec3(lo[0], lo[1], lo[2]), glm::vec3(hi[0], hi[1], hi[2])};

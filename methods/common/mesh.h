@@ -58,11 +58,10 @@ struct WoodParams {
 // hundred triangles and branches thinner than that vanish.
 class WoodRenderer {
  public:
-  // `captured` (empty, or one flag per wood triangle): triangles the method's images hold for
-  // trees whose projected radius is below `capturedBelowPixels`; such trees draw only the rest
-  // (WoodLevels' residual chain).
-  void bake(const Tree& tree, bool levels, const std::vector<bool>& captured = {},
-            float capturedBelowPixels = 0.0f);
+  // `captured`: per image set (decreasing belowPixels), the wood triangles the method's images
+  // hold for trees whose projected radius is below its belowPixels; such trees draw only the
+  // rest (one WoodLevels residual chain each). Empty: every tree draws the full chain.
+  void bake(const Tree& tree, bool levels, const std::vector<CapturedWood>& captured = {});
   void upload(gl::Device& device, bool mipmaps);
   // Draws `instances` (also in frame.instanceBuffer, in span order).
   void draw(const FrameContext& frame, std::span<const Instance> instances,

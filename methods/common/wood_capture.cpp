@@ -49,39 +49,65 @@ std::vector<std::vector<uint32_t>> assignWoodToBillboards(const WoodMesh& wood,
 
 WoodInImages captureWoodInImages(const Tree& tree, const std::vector<BillboardCloud>& clouds,
                                  size_t firstImageCloud, const std::vector<float>& largestPixels,
-                                 float capturePixels) {
+                                 float capturePixels, float farCapturePixels) {
   WoodInImages result;
   size_t total = 0;
   for (const BillboardCloud& cloud : clouds) total += cloud.billboards.size();
   result.perBillboard.resize(total);
   result.report = {{"triangles", 0}};
-  if (capturePixels <= 0.0f || clouds.size() <= firstImageCloud) return result;
+  if ((capturePixels <= 0.0f && farCapturePixels <= 0.0f) || clouds.size() <= firstImageCloud)
+    return result;
   const float radius = 0.5f * glm::length(tree.bounds.extent());
-  std::vector<std::vector<std::vector<uint32_t>>> assigned;
+  const size_t triangles = tree.wood.triangleCount();
+  const size_t imageClouds = clouds.size() - firstImageCloud;
+  // Each image cloud's triangles within `pixels` of its billboards, and where they go.
+  const auto within = [&](size_t c, float pixels, std::vector<bool>& held) {
+    const float maxDistance = pixels * radius / largestPixels.at(c - firstImageCloud);
+    auto assigned = assignWoodToBillboards(tree.wood, clouds[c].billboards, maxDistance);
+    held.assign(triangles, false);
+    for (const auto& list : assigned)
+      for (uint32_t t : list) held[t] = true;
+    return std::make_pair(maxDistance, std::move(assigned));
+  };
+  std::vector<std::vector<std::vector<uint32_t>>> assigned(imageClouds);
+  std::vector<std::vector<bool>> held(imageClouds);
   nlohmann::json bounds = nlohmann::json::array();
-  result.captured.assign(tree.wood.triangleCount(), true);
-  for (size_t c = firstImageCloud; c < clouds.size(); ++c) {
-    const float maxDistance = capturePixels * radius / largestPixels.at(c - firstImageCloud);
-    bounds.push_back(maxDistance);
-    assigned.push_back(assignWoodToBillboards(tree.wood, clouds[c].billboards, maxDistance));
-    std::vector<bool> inCloud(tree.wood.triangleCount(), false);
-    for (const auto& triangles : assigned.back())
-      for (uint32_t t : triangles) inCloud[t] = true;
-    for (size_t t = 0; t < inCloud.size(); ++t)
-      result.captured[t] = result.captured[t] && inCloud[t];
+  std::vector<bool> shared(triangles, capturePixels > 0.0f);  // what every image cloud holds
+  for (size_t i = 0; i < imageClouds; ++i) {
+    if (capturePixels <= 0.0f) break;
+    std::vector<bool> inCloud;
+    auto [distance, lists] = within(firstImageCloud + i, capturePixels, inCloud);
+    bounds.push_back(distance);
+    assigned[i] = std::move(lists);
+    for (size_t t = 0; t < triangles; ++t) shared[t] = shared[t] && inCloud[t];
+  }
+  for (size_t i = 0; i < imageClouds; ++i) held[i] = shared;
+  nlohmann::json farReport;
+  const bool ownFar = farCapturePixels > 0.0f;
+  if (ownFar) {
+    auto [distance, lists] = within(clouds.size() - 1, farCapturePixels, held.back());
+    assigned.back() = std::move(lists);
+    farReport = {{"triangles", size_t(std::count(held.back().begin(), held.back().end(), true))},
+                 {"max_plane_distance", distance},
+                 {"below_px", largestPixels.back()}};
   }
   size_t first = 0;
   for (size_t c = 0; c < firstImageCloud; ++c) first += clouds[c].billboards.size();
-  for (const auto& cloud : assigned) {
-    for (const auto& triangles : cloud) {
-      for (uint32_t t : triangles)
-        if (result.captured[t]) result.perBillboard[first].push_back(t);
+  for (size_t i = 0; i < imageClouds; ++i) {
+    for (const auto& list : assigned[i]) {
+      for (uint32_t t : list)
+        if (held[i][t]) result.perBillboard[first].push_back(t);
       ++first;
     }
   }
-  const auto count = size_t(std::count(result.captured.begin(), result.captured.end(), true));
+  const auto count = size_t(std::count(shared.begin(), shared.end(), true));
+  // (A chain even when nothing was captured, so that the levels do not depend on the count.)
+  if (capturePixels > 0.0f && !(ownFar && imageClouds == 1))
+    result.captured.push_back({shared, largestPixels.front()});
+  if (ownFar) result.captured.push_back({held.back(), largestPixels.back()});
   result.report = {
       {"triangles", count}, {"max_plane_distance", bounds}, {"below_px", largestPixels.front()}};
+  if (ownFar) result.report["far"] = farReport;
   return result;
 }
 

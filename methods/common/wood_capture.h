@@ -7,6 +7,7 @@
 
 #include "common/tree.h"
 #include "methods/common/billboard_cloud.h"
+#include "methods/common/wood_levels.h"
 
 namespace canopy {
 
@@ -25,13 +26,16 @@ std::vector<std::vector<uint32_t>> assignWoodToBillboards(const WoodMesh& wood,
 // radius, so it may flatten wood by `capturePixels` × radius / largest world units. A triangle
 // is captured when every image cloud holds it within its bound (assignWoodToBillboards): the
 // images then hold exactly the wood that trees drawn with them do not draw as geometry.
+// `farCapturePixels` (0: none) gives the last image cloud a bound of its own instead: it holds
+// every triangle within that many of its pixels, and trees drawn with it draw only the rest (a
+// residual chain of their own), while the clouds before it keep the set above.
 struct WoodInImages {
-  std::vector<bool> captured;                       // per wood triangle; empty: none
+  std::vector<CapturedWood> captured;               // per residual chain; empty: none
   std::vector<std::vector<uint32_t>> perBillboard;  // over every cloud's billboards in order
   nlohmann::json report;  // triangles captured and each image cloud's plane-distance bound
 };
 WoodInImages captureWoodInImages(const Tree& tree, const std::vector<BillboardCloud>& clouds,
                                  size_t firstImageCloud, const std::vector<float>& largestPixels,
-                                 float capturePixels);
+                                 float capturePixels, float farCapturePixels = 0.0f);
 
 }  // namespace canopy

@@ -1,6 +1,7 @@
 #include "methods/common/wood_levels.h"
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 
 #include <meshoptimizer.h>
@@ -22,11 +23,16 @@ std::vector<float> WoodLevels::thresholds(float treeRadius, float errorPixels) c
     for (size_t level = 1; level < levels(); ++level) result.push_back(allowedBelow(level));
     return result;
   }
-  for (size_t level = 1; level < residualFrom; ++level)
-    result.push_back(std::max(allowedBelow(level), residualBelowPixels));
-  result.push_back(residualBelowPixels);  // the residual chain's first level
-  for (size_t level = residualFrom + 1; level < levels(); ++level)
-    result.push_back(std::min(allowedBelow(level), residualBelowPixels));
+  // Chain c (0: the full one) is drawn between `above` and `below` pixels of projected radius.
+  size_t chain = 0;
+  for (size_t level = 1; level < levels(); ++level) {
+    const bool first = chain < residualChains.size() && level == residualChains[chain].from;
+    if (first) ++chain;
+    const float below =
+        chain == 0 ? std::numeric_limits<float>::max() : residualChains[chain - 1].belowPixels;
+    const float above = chain < residualChains.size() ? residualChains[chain].belowPixels : 0.0f;
+    result.push_back(first ? below : std::clamp(allowedBelow(level), above, below));
+  }
   return result;
 }
 
@@ -45,9 +51,21 @@ bool WoodLevels::consistent() const {
     next += range.count;
   }
   if (next != indices.size()) return false;
-  if (residualFrom >= levels() || (hasResidual() && !(residualBelowPixels > 0.0f))) return false;
+  size_t previousFrom = 0;
+  float previousBelow = std::numeric_limits<float>::infinity();
+  for (const ResidualChain& chain : residualChains) {
+    if (chain.from <= previousFrom || chain.from >= levels() || !(chain.belowPixels > 0.0f) ||
+        !(chain.belowPixels < previousBelow))
+      return false;
+    previousFrom = chain.from;
+    previousBelow = chain.belowPixels;
+  }
+  const auto chainStart = [&](size_t level) {
+    return std::any_of(residualChains.begin(), residualChains.end(),
+                       [&](const ResidualChain& chain) { return chain.from == level; });
+  };
   for (size_t level = 1; level < levels(); ++level) {
-    if (level != residualFrom && !(errors[level] >= errors[level - 1])) return false;
+    if (!chainStart(level) && !(errors[level] >= errors[level - 1])) return false;
   }
   return true;
 }
@@ -162,8 +180,7 @@ WoodLevels residualLevels(const WoodLevels& full, const std::vector<bool>& captu
 }
 
 void appendResidualLevels(WoodLevels& levels, const WoodLevels& residual, float belowPixels) {
-  levels.residualFrom = levels.levels();
-  levels.residualBelowPixels = belowPixels;
+  levels.residualChains.push_back({levels.levels(), belowPixels});
   const auto offset = uint32_t(levels.indices.size());
   for (WoodRange range : residual.ranges) {
     range.first += offset;

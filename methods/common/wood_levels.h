@@ -20,31 +20,49 @@ struct WoodRange {
 // their triangles follow one another in `indices`, each level sorted by material.
 //
 // A method whose images for small trees already hold part of the wood (captured into them at
-// bake) adds a second chain, the "residual" levels from `residualFrom` on: the rest of the wood
-// and its simplifications, drawn instead of the full chain once the tree's projected radius is
-// below `residualBelowPixels` (where those images are drawn).
+// bake) adds "residual" chains after the full one: the rest of the wood and its simplifications,
+// drawn instead of the chain before once the tree's projected radius is below the chain's
+// `belowPixels` (where those images are drawn). A method with several such images (a middle and
+// a far cloud) adds one chain per image set, in decreasing `belowPixels`: the smaller the tree,
+// the more of its wood the images hold.
+struct ResidualChain {
+  size_t from = 0;           // the chain's first level
+  float belowPixels = 0.0f;  // projected radius (output pixels) below which it is drawn
+};
+
+// Wood triangles a method's images hold for trees drawn below `belowPixels` of projected radius.
+struct CapturedWood {
+  std::vector<bool> triangles;  // one flag per wood triangle
+  float belowPixels = 0.0f;
+};
+
 struct WoodLevels {
   std::vector<uint32_t> indices;
   std::vector<WoodRange> ranges;         // every level's ranges, level by level
   std::vector<uint32_t> rangesPerLevel;  // how many of `ranges` each level has
   std::vector<float> errors;  // each level's largest deviation from its chain's first (world units)
-  size_t residualFrom = 0;    // first residual level; 0: no residual chain
-  float residualBelowPixels = 0.0f;  // projected radius (output pixels) below which it is drawn
+  std::vector<ResidualChain> residualChains;  // in level order; empty: the full chain only
 
   size_t levels() const { return rangesPerLevel.size(); }
-  bool hasResidual() const { return residualFrom > 0; }
+  bool hasResidual() const { return !residualChains.empty(); }
+  // Whether `level` belongs to a residual chain.
+  bool isResidual(size_t level) const {
+    return hasResidual() && level >= residualChains.front().from;
+  }
   // The index of level `level`'s first range in `ranges`.
   size_t firstRange(size_t level) const;
   uint32_t triangles(size_t level) const;
   // Projected tree radii (output pixels) below which the next coarser level is drawn
   // (LodInstances' thresholds, one per level after the first), so that no level's error spans
   // more than `errorPixels` output pixels: level l + 1 is allowed once its error × radiusPixels /
-  // treeRadius <= errorPixels. With a residual chain, the full chain's thresholds stop at
-  // residualBelowPixels and the residual chain's start there; a level never drawn gets its
-  // successor's threshold, so its range stays empty. Empty: level 0 always.
+  // treeRadius <= errorPixels. With residual chains, each chain's thresholds stay within the
+  // radii it is drawn at (below its belowPixels, above the next chain's) and a chain's first
+  // level starts at its belowPixels; a level never drawn gets its successor's threshold, so its
+  // range stays empty. Empty: level 0 always.
   std::vector<float> thresholds(float treeRadius, float errorPixels) const;
   // Structural checks after loading: the ranges tile `indices` in order, whole triangles, one
-  // error per level, errors that do not fall within a chain.
+  // error per level, errors that do not fall within a chain, chains in order with positive and
+  // decreasing belowPixels.
   bool consistent() const;
 };
 
@@ -64,8 +82,8 @@ WoodLevels buildWoodLevels(const std::vector<glm::vec3>& positions,
 // mesh itself would stall at the borders the captured triangles leave.
 WoodLevels residualLevels(const WoodLevels& full, const std::vector<bool>& captured);
 
-// Appends `residual` to `levels` as its residual chain, drawn below `belowPixels` of projected
-// radius.
+// Appends `residual` to `levels` as its next residual chain, drawn below `belowPixels` of
+// projected radius (below the previous chain's).
 void appendResidualLevels(WoodLevels& levels, const WoodLevels& residual, float belowPixels);
 
 }  // namespace canopy

@@ -190,8 +190,7 @@ class MultilayerIndirect final : public Method {
     const WoodInImages woodInImages = captureWoodInImages(
         tree, clouds, clouds.size() - std::min(clouds.size(), imageLevels.size()), imageLevels,
         mParams.wood.draw && mParams.cloud.lod ? mParams.woodCapturePixels : 0.0f);
-    mWood.bake(tree, mParams.wood.levels(), woodInImages.captured,
-               imageLevels.empty() ? 0.0f : imageLevels.front());
+    mWood.bake(tree, mParams.wood.levels(), woodInImages.captured);
     const WoodColorSampler woodColors(tree);
     std::vector<const Billboard*> billboards;
     for (const BillboardCloud& cloud : clouds) {

@@ -158,6 +158,16 @@ TEST(ClusteringBadInput, ClusterCountOutOfRangeNamesTheParameter) {
   EXPECT_THROW(create({{"lod_near_px", 30.0}, {"lod_far_px", 60.0}}, "test"), InputError);
   EXPECT_THROW(create({{"clusters", 100}, {"clusters_mid", 200}}, "test"), InputError);
   EXPECT_THROW(create({{"clusters_mid", 20}, {"clusters_far", 30}}, "test"), InputError);
+  for (const nlohmann::json& farBelowMiddle :
+       {nlohmann::json{{"wood_capture_px", 8.0}, {"wood_capture_far_px", 4.0}},
+        nlohmann::json{{"lod", false}, {"wood_capture_far_px", 4.0}}}) {
+    try {
+      create(farBelowMiddle, "test");
+      ADD_FAILURE() << farBelowMiddle.dump() << " was accepted";
+    } catch (const InputError& error) {
+      EXPECT_NE(std::string(error.what()).find("wood_capture_far_px"), std::string::npos);
+    }
+  }
   // Unset coarse counts are written back as the counts used: K/3 and K/10.
   const auto method = create({{"clusters", 100}}, "test");
   EXPECT_EQ(method->effectiveParams().at("clusters_mid"), 33);

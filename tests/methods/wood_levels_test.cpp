@@ -143,15 +143,16 @@ TEST(WoodLevels, ThresholdsKeepTheErrorWithinThePixels) {
   EXPECT_TRUE(levels.thresholds(treeRadius, 0.0f).empty()) << "0 px: the full mesh always";
 }
 
-// A residual chain (the wood a method's images do not hold): above its radius the full chain
-// within the pixel bound, below it the residual chain within the same bound, never a level of
-// the other chain.
-TEST(WoodLevels, ResidualChainTakesOverBelowItsRadius) {
+// Residual chains (the wood a method's images do not hold): above the first chain's radius the
+// full chain within the pixel bound, below it that residual chain within the same bound, and
+// below the second chain's radius (images that hold more of the wood: a far cloud) the second,
+// never a level of another chain.
+TEST(WoodLevels, ResidualChainsTakeOverBelowTheirRadii) {
   const TwoTubes mesh = trunkAndTwig();
   const std::vector<WoodRange> ranges = {{0, uint32_t(mesh.indices.size()), 0}};
   WoodLevels levels = buildWoodLevels(mesh.positions, mesh.indices, ranges, 0.001f, 0.5f);
   const size_t fullLevels = levels.levels();
-  // The residual: the trunk alone (the twig held by the images).
+  // The first residual: the trunk alone (the twig held by the images).
   std::vector<bool> captured(mesh.positions.size(), false);
   for (size_t v = mesh.trunkVertices; v < captured.size(); ++v) captured[v] = true;
   const WoodLevels residual = residualLevels(levels, captured);
@@ -169,11 +170,20 @@ TEST(WoodLevels, ResidualChainTakesOverBelowItsRadius) {
         ASSERT_LT(residual.indices[i], mesh.trunkVertices) << "no twig triangle at " << level;
     }
   }
-  const float below = 40.0f;
+  // The second: nothing left (the images of the smallest trees hold all the wood).
+  const WoodLevels nothing = residualLevels(levels, std::vector<bool>(captured.size(), true));
+  ASSERT_EQ(nothing.levels(), fullLevels);
+  EXPECT_TRUE(nothing.indices.empty());
+  const float below = 40.0f, farBelow = 12.0f;
   appendResidualLevels(levels, residual, below);
   ASSERT_TRUE(levels.consistent());
-  ASSERT_EQ(levels.residualFrom, fullLevels);
+  appendResidualLevels(levels, nothing, farBelow);
+  ASSERT_TRUE(levels.consistent());
+  ASSERT_EQ(levels.residualChains.size(), 2u);
+  ASSERT_EQ(levels.residualChains[0].from, fullLevels);
+  ASSERT_EQ(levels.residualChains[1].from, 2 * fullLevels);
   EXPECT_EQ(levels.triangles(fullLevels), trunkTriangles);
+  EXPECT_EQ(levels.triangles(2 * fullLevels), 0u);
   const float treeRadius = 1.2f;
   for (const float errorPixels : {0.0f, 0.3f, 2.0f}) {
     const std::vector<float> thresholds = levels.thresholds(treeRadius, errorPixels);
@@ -182,17 +192,22 @@ TEST(WoodLevels, ResidualChainTakesOverBelowItsRadius) {
     for (float radiusPixels = 0.5f; radiusPixels < 5000.0f; radiusPixels *= 1.17f) {
       const auto level = size_t(LodInstances::levelFor(radiusPixels, thresholds));
       ASSERT_LT(level, levels.levels());
-      EXPECT_EQ(level >= levels.residualFrom, radiusPixels < below) << radiusPixels;
+      const size_t chain = radiusPixels < farBelow ? 2 : radiusPixels < below ? 1 : 0;
+      EXPECT_EQ(level / fullLevels, chain) << radiusPixels << " px";
+      EXPECT_EQ(levels.isResidual(level), chain > 0) << radiusPixels;
       EXPECT_LE(levels.errors[level] * radiusPixels / treeRadius, errorPixels * 1.0001f)
           << radiusPixels << " px, bound " << errorPixels;
     }
   }
   WoodLevels corrupt = levels;
-  corrupt.residualFrom = levels.levels();
+  corrupt.residualChains.back().from = levels.levels();
   EXPECT_FALSE(corrupt.consistent());
   corrupt = levels;
-  corrupt.residualBelowPixels = 0.0f;
+  corrupt.residualChains.front().belowPixels = 0.0f;
   EXPECT_FALSE(corrupt.consistent());
+  corrupt = levels;
+  corrupt.residualChains.back().belowPixels = below;
+  EXPECT_FALSE(corrupt.consistent()) << "each chain below the one before";
 }
 
 TEST(WoodLevels, MaterialsStaySeparateAndNoBoundMeansOneLevel) {
@@ -350,6 +365,69 @@ TEST_P(CapturedWood, IsInTheImagesNotTheGeometry) {
 
 INSTANTIATE_TEST_SUITE_P(ImageClouds, CapturedWood,
                          testing::Values("billboard_cloud", "multilayer_indirect"));
+
+// wood_capture_far_px: the far cloud holds the wood within its own, larger bound, so a far tree
+// draws less wood than with wood_capture_px alone, while a tree drawn with the middle cloud
+// draws what it drew before; the far images hold the wood the geometry no longer draws.
+TEST_F(WoodInImpostors, FarCloudCapturesTheWoodWithinItsOwnBound) {
+  auto reference = test::bakeAndUpload(device, tree, "polygonal", nlohmann::json::object());
+  auto shared = test::bakeAndUpload(device, tree, "billboard_cloud", {{"wood_capture_px", 2.0}},
+                                    Shading::kUnlit, "shared");
+  auto ownFar = test::bakeAndUpload(device, tree, "billboard_cloud",
+                                    {{"wood_capture_px", 2.0}, {"wood_capture_far_px", 8.0}},
+                                    Shading::kUnlit, "own far");
+  auto woodless = test::bakeAndUpload(device, tree, "billboard_cloud", {{"wood", false}},
+                                      Shading::kUnlit, "woodless");
+  const nlohmann::json captured = ownFar->bakeReport().at("wood_captured");
+  const auto sharedTriangles = captured.at("triangles").get<size_t>();
+  EXPECT_EQ(sharedTriangles,
+            shared->bakeReport().at("wood_captured").at("triangles").get<size_t>());
+  const auto farTriangles = captured.at("far").at("triangles").get<size_t>();
+  EXPECT_GT(farTriangles, sharedTriangles + tree.wood.triangleCount() / 4) << captured.dump();
+  // Two residual chains after the full one: levels come in three equal runs.
+  const nlohmann::json levels = ownFar->bakeReport().at("wood_levels");
+  const size_t fullLevels = shared->bakeReport().at("wood_levels").size() / 2;
+  ASSERT_EQ(levels.size(), 3 * fullLevels);
+  // 8 radii: about 22 px of radius, the far cloud; the second residual chain.
+  const auto [referenceDrawn, referenceImage] = drawAt(*reference, 8.0f);
+  const auto [sharedDrawn, sharedImage] = drawAt(*shared, 8.0f);
+  const auto [farDrawn, farImage] = drawAt(*ownFar, 8.0f);
+  ASSERT_EQ(farDrawn.woodInstancesPerLevel.size(), levels.size());
+  for (size_t level = 0; level < 2 * fullLevels; ++level)
+    EXPECT_EQ(farDrawn.woodInstancesPerLevel[level], 0u) << level;
+  EXPECT_LT(farDrawn.counts.primitives, sharedDrawn.counts.primitives);
+  // Its images hold that wood: coverage nearer the drawn wood's than the woodless cloud's
+  // (measured: 0.278 against 0.194 drawing the residual of 2 px, 0.490 without wood; 102
+  // primitives against 1,488).
+  const double sharedError = compareImages(referenceImage, sharedImage).coverageError;
+  const double farError = compareImages(referenceImage, farImage).coverageError;
+  const double woodlessError =
+      compareImages(referenceImage, drawAt(*woodless, 8.0f).second).coverageError;
+  EXPECT_LT(farError, 0.5 * (sharedError + woodlessError)) << sharedError << " " << woodlessError;
+  // 3 radii: about 59 px, the middle cloud, with the first residual chain as before.
+  const auto [sharedMiddle, sharedMiddleImage] = drawAt(*shared, 3.0f);
+  const auto [farMiddle, farMiddleImage] = drawAt(*ownFar, 3.0f);
+  EXPECT_EQ(farMiddle.counts.primitives, sharedMiddle.counts.primitives);
+  ASSERT_EQ(farMiddle.woodInstancesPerLevel.size(), levels.size());
+  uint64_t firstChain = 0;
+  for (size_t level = fullLevels; level < 2 * fullLevels; ++level)
+    firstChain += farMiddle.woodInstancesPerLevel[level];
+  EXPECT_EQ(firstChain, 1u);
+  // Both residual chains survive the saved asset: the far tree draws the same.
+  test::TempDir dir;
+  AssetFolder asset(dir.path());
+  ownFar->save(asset);
+  auto loaded =
+      builtinMethods().find("billboard_cloud").create(ownFar->effectiveParams(), "loaded");
+  AssetFolder reader(dir.path());
+  loaded->load(reader);
+  {
+    gl::Device::OwnerScope scope(device, "loaded");
+    loaded->upload(device);
+  }
+  EXPECT_EQ(drawAt(*loaded, 8.0f).second.pixels, farImage.pixels);
+  EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
+}
 
 // lod_lowres_px: between it and lod_far_px the multi-layer middle cloud is drawn without its
 // list walk, as its low-resolution texture (the same billboards, another image); above it, and
