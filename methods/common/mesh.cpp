@@ -232,23 +232,12 @@ struct WoodLevelFields {
   }
 };
 
-// One residual chain: its first level and the projected radius below which it is drawn.
-struct ResidualChainFields {
-  size_t from = 0;
-  float belowPixels = 0.0f;
-  template <class V>
-  void visit(V& v) {
-    v("from", from);
-    v("below_px", belowPixels);
-  }
-};
-
 struct WoodFields {
   struct Wood {
     std::vector<WoodMaterialFields> materials;
     size_t textures = 0;
     std::vector<WoodLevelFields> levels;
-    std::vector<ResidualChainFields> residualChains;  // WoodLevels::residualChains
+    std::vector<ResidualChain> residualChains;  // WoodLevels::residualChains
     std::array<float, 3> boundsMin{}, boundsMax{};
     bool solid = false;
     template <class V>
@@ -278,8 +267,7 @@ void WoodRenderer::save(AssetFolder& asset) const {
   for (size_t level = 0; level < mLevels.levels(); ++level) {
     fields.wood.levels.push_back({mLevels.rangesPerLevel[level], mLevels.errors[level]});
   }
-  for (const ResidualChain& chain : mLevels.residualChains)
-    fields.wood.residualChains.push_back({chain.from, chain.belowPixels});
+  fields.wood.residualChains = mLevels.residualChains;
   fields.wood.boundsMin = {mBounds.min.x, mBounds.min.y, mBounds.min.z};
   fields.wood.boundsMax = {mBounds.max.x, mBounds.max.y, mBounds.max.z};
   for (const WoodMaterial& m : mMaterials) {
@@ -304,8 +292,7 @@ void WoodRenderer::load(AssetFolder& asset) {
     mLevels.rangesPerLevel.push_back(level.ranges);
     mLevels.errors.push_back(level.error);
   }
-  for (const ResidualChainFields& chain : fields.wood.residualChains)
-    mLevels.residualChains.push_back({chain.from, chain.belowPixels});
+  mLevels.residualChains = fields.wood.residualChains;
   const auto& lo = fields.wood.boundsMin;
   const auto& hi = fields.wood.boundsMax;
   mBounds = {glm::vec3(lo[0], lo[1], lo[2]), glm::vec3(hi[0], hi[1], hi[2])};

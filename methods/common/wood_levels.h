@@ -28,6 +28,11 @@ struct WoodRange {
 struct ResidualChain {
   size_t from = 0;           // the chain's first level
   float belowPixels = 0.0f;  // projected radius (output pixels) below which it is drawn
+  template <class V>
+  void visit(V& v) {  // as saved assets hold it
+    v("from", from);
+    v("below_px", belowPixels);
+  }
 };
 
 // Wood triangles a method's images hold for trees drawn below `belowPixels` of projected radius.
