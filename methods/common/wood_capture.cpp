@@ -70,7 +70,6 @@ WoodInImages captureWoodInImages(const Tree& tree, const std::vector<BillboardCl
     return std::make_pair(maxDistance, std::move(assigned));
   };
   std::vector<std::vector<std::vector<uint32_t>>> assigned(imageClouds);
-  std::vector<std::vector<bool>> held(imageClouds);
   nlohmann::json bounds = nlohmann::json::array();
   std::vector<bool> shared(triangles, capturePixels > 0.0f);  // what every image cloud holds
   for (size_t i = 0; i < imageClouds; ++i) {
@@ -81,22 +80,25 @@ WoodInImages captureWoodInImages(const Tree& tree, const std::vector<BillboardCl
     assigned[i] = std::move(lists);
     for (size_t t = 0; t < triangles; ++t) shared[t] = shared[t] && inCloud[t];
   }
-  for (size_t i = 0; i < imageClouds; ++i) held[i] = shared;
   nlohmann::json farReport;
   const bool ownFar = farCapturePixels > 0.0f;
+  std::vector<bool> farHeld;  // with ownFar: what the last image cloud holds, on its own
   if (ownFar) {
-    auto [distance, lists] = within(clouds.size() - 1, farCapturePixels, held.back());
+    auto [distance, lists] = within(clouds.size() - 1, farCapturePixels, farHeld);
     assigned.back() = std::move(lists);
-    farReport = {{"triangles", size_t(std::count(held.back().begin(), held.back().end(), true))},
+    farReport = {{"triangles", size_t(std::count(farHeld.begin(), farHeld.end(), true))},
                  {"max_plane_distance", distance},
                  {"below_px", largestPixels.back()}};
   }
+  const auto heldBy = [&](size_t i) -> const std::vector<bool>& {
+    return ownFar && i + 1 == imageClouds ? farHeld : shared;
+  };
   size_t first = 0;
   for (size_t c = 0; c < firstImageCloud; ++c) first += clouds[c].billboards.size();
   for (size_t i = 0; i < imageClouds; ++i) {
     for (const auto& list : assigned[i]) {
       for (uint32_t t : list)
-        if (held[i][t]) result.perBillboard[first].push_back(t);
+        if (heldBy(i)[t]) result.perBillboard[first].push_back(t);
       ++first;
     }
   }
@@ -104,7 +106,7 @@ WoodInImages captureWoodInImages(const Tree& tree, const std::vector<BillboardCl
   // (A chain even when nothing was captured, so that the levels do not depend on the count.)
   if (capturePixels > 0.0f && !(ownFar && imageClouds == 1))
     result.captured.push_back({shared, largestPixels.front()});
-  if (ownFar) result.captured.push_back({held.back(), largestPixels.back()});
+  if (ownFar) result.captured.push_back({farHeld, largestPixels.back()});
   result.report = {
       {"triangles", count}, {"max_plane_distance", bounds}, {"below_px", largestPixels.front()}};
   if (ownFar) result.report["far"] = farReport;
