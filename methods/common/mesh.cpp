@@ -82,8 +82,8 @@ void WoodRenderer::bake(const Tree& tree, bool levels, const std::vector<Capture
   std::vector<WoodRange> ranges;
   sortByMaterial(wood, indices, ranges);
   mLevels = buildWoodLevels(wood.positions, indices, ranges, finest, coarsest);
-  // Every residual chain filters the full chain alone (levels 0 to here).
-  const WoodLevels full = mLevels;
+  // Every residual chain filters the full chain alone, so all are built before any is appended.
+  std::vector<WoodLevels> residuals;
   for (const CapturedWood& images : captured) {
     // A vertex is in the images when every triangle around it is.
     std::vector<bool> capturedVertices(wood.positions.size(), true);
@@ -91,8 +91,10 @@ void WoodRenderer::bake(const Tree& tree, bool levels, const std::vector<Capture
       if (images.triangles[t]) continue;
       for (int k = 0; k < 3; ++k) capturedVertices[wood.indices[t * 3 + k]] = false;
     }
-    appendResidualLevels(mLevels, residualLevels(full, capturedVertices), images.belowPixels);
+    residuals.push_back(residualLevels(mLevels, capturedVertices));
   }
+  for (size_t i = 0; i < residuals.size(); ++i)
+    appendResidualLevels(mLevels, residuals[i], captured[i].belowPixels);
   mMaterials = tree.woodMaterials;
   mTextures = tree.woodTextures;
 }
