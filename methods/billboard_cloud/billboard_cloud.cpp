@@ -31,9 +31,9 @@ struct BillboardCloudParams {
   WoodParams wood;
   std::string compression = "none";
   bool backCapture = true;
-  float woodCapturePixels = 0.0f;
-  float woodCaptureFarPixels = 0.0f;
-  std::string alphaTest = "fixed";
+  float woodCapturePixels = 3.0f;
+  float woodCaptureFarPixels = 16.0f;
+  std::string alphaTest = "hashed";
 
   template <class Visitor>
   void visit(Visitor& v) {
@@ -54,12 +54,12 @@ struct BillboardCloudParams {
       "the middle and far clouds' images also hold the wood lying (every corner) within this "
       "many output pixels of one of their billboards, measured at the largest projected size "
       "each cloud is drawn at; trees drawn with them draw only the rest of the wood as geometry "
-      "(0: images of leaves only; needs lod)");
+      "(0: images of leaves only; 0 in effect without lod or wood)");
     v("wood_capture_far_px", woodCaptureFarPixels, 0.0f, 100.0f,
       "the far cloud's own bound instead (0: wood_capture_px's): its images hold the wood within "
       "this many output pixels of its billboards at its largest projected size (lod_far_px), "
       "and trees drawn with it draw only the rest; the middle cloud keeps what wood_capture_px "
-      "gives both clouds (at least wood_capture_px; needs lod)");
+      "gives both clouds (at least wood_capture_px; 0 in effect without lod or wood)");
     v("alpha_test", alphaTest, {"fixed", "hashed"},
       "the atlas' alpha test: at 0.5 everywhere, as the reference tests its leaf cards; or, "
       "where the atlas is minified (its mip levels average several texels), against a threshold "
@@ -75,11 +75,17 @@ class BillboardCloudMethod final : public Method {
  public:
   explicit BillboardCloudMethod(BillboardCloudParams params) : mParams(std::move(params)) {
     mParams.cloud.resolve("billboard_cloud");
+    // Without coarse clouds there are no images to hold wood, and without wood nothing to
+    // hold: the effective parameters say that no wood is captured.
+    if (!mParams.cloud.lod || !mParams.wood.draw) {
+      mParams.woodCapturePixels = 0.0f;
+      mParams.woodCaptureFarPixels = 0.0f;
+    }
     if (mParams.woodCaptureFarPixels > 0.0f &&
-        (!mParams.cloud.lod || mParams.woodCaptureFarPixels < mParams.woodCapturePixels))
+        mParams.woodCaptureFarPixels < mParams.woodCapturePixels)
       throwInputError(
           "billboard_cloud: parameter 'wood_capture_far_px' ({}) must be at least "
-          "'wood_capture_px' ({}) with 'lod' on, or be 0",
+          "'wood_capture_px' ({}), or be 0",
           mParams.woodCaptureFarPixels, mParams.woodCapturePixels);
   }
 
@@ -106,8 +112,7 @@ class BillboardCloudMethod final : public Method {
     // The middle and far clouds' images hold the wood trees drawn with them do not draw.
     const WoodInImages woodInImages = captureWoodInImages(
         tree, clouds, 1, {mParams.cloud.lodNearPixels, mParams.cloud.lodFarPixels},
-        mParams.wood.draw ? mParams.woodCapturePixels : 0.0f,
-        mParams.wood.draw ? mParams.woodCaptureFarPixels : 0.0f);
+        mParams.woodCapturePixels, mParams.woodCaptureFarPixels);
     mReport["wood_captured"] = woodInImages.report;
     mWood.bake(tree, mParams.wood.levels(), woodInImages.captured);
     const AtlasLayout preview = packAtlas(sizes, kAtlasPadding, kAtlasAlignment);

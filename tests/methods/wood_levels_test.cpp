@@ -270,8 +270,13 @@ class WoodInImpostors : public testing::Test {
 // The wood levels inside an impostor: a far tree draws far fewer wood triangles than with the
 // full mesh, and at a bound below a pixel a near view is the full mesh's, pixel for pixel.
 TEST_F(WoodInImpostors, FarTreesDrawCoarseWoodAndNearViewsTheFullMesh) {
-  auto full = test::bakeAndUpload(device, tree, "billboard_cloud", {{"wood_error_px", 0.0}});
-  auto coarse = test::bakeAndUpload(device, tree, "billboard_cloud", {{"wood_error_px", 1.0}},
+  // One chain of levels: no wood captured into the images (CapturedWood checks that).
+  const auto withError = [](double pixels) {
+    return nlohmann::json{
+        {"wood_error_px", pixels}, {"wood_capture_px", 0.0}, {"wood_capture_far_px", 0.0}};
+  };
+  auto full = test::bakeAndUpload(device, tree, "billboard_cloud", withError(0.0));
+  auto coarse = test::bakeAndUpload(device, tree, "billboard_cloud", withError(1.0),
                                     Shading::kUnlit, "coarse");
   const nlohmann::json levels = coarse->bakeReport().at("wood_levels");
   ASSERT_GE(levels.size(), 3u);
@@ -290,8 +295,8 @@ TEST_F(WoodInImpostors, FarTreesDrawCoarseWoodAndNearViewsTheFullMesh) {
   ASSERT_EQ(coarseFar.woodInstancesPerLevel.size(), levels.size());
   EXPECT_EQ(coarseFar.woodInstancesPerLevel[0], 0u);
   // Near (1.2 radii, ~260 px of radius): a bound of 0.1 px keeps the full mesh.
-  auto fine = test::bakeAndUpload(device, tree, "billboard_cloud", {{"wood_error_px", 0.1}},
-                                  Shading::kUnlit, "fine");
+  auto fine =
+      test::bakeAndUpload(device, tree, "billboard_cloud", withError(0.1), Shading::kUnlit, "fine");
   const auto [fullNear, fullNearImage] = draw(*full, 1.2f);
   const auto [fineNear, fineNearImage] = draw(*fine, 1.2f);
   EXPECT_EQ(fineNear.woodInstancesPerLevel.at(0), 1u);
@@ -309,10 +314,15 @@ TEST_P(CapturedWood, IsInTheImagesNotTheGeometry) {
   const std::string method = GetParam();
   // Multi-layer: a far cloud of 6 planes and 2 texels a hash cell, so that this 400-leaf tree's
   // billboards span the branches and their texels resolve them (its default, 100 planes of
-  // 4 leaves at 1 texel a cell, is sized for trees of thousands of leaves).
-  const nlohmann::json base = method == "multilayer_indirect"
-                                  ? nlohmann::json{{"clusters", 60}, {"lowres_texels_per_cell", 2}}
-                                  : nlohmann::json::object();
+  // 4 leaves at 1 texel a cell, is sized for trees of thousands of leaves). Classic cloud: one
+  // bound for both coarse clouds, and the fixed alpha test, whose thresholded coverage the
+  // bounds below were measured with (the hashed test dithers the thin captured branches'
+  // partial coverage, which a per-pixel coverage error counts against any capture: 0.248
+  // captured against 0.162 drawing the wood and 0.316 without).
+  const nlohmann::json base =
+      method == "multilayer_indirect"
+          ? nlohmann::json{{"clusters", 60}, {"lowres_texels_per_cell", 2}}
+          : nlohmann::json{{"wood_capture_far_px", 0.0}, {"alpha_test", "fixed"}};
   const auto with = [&](const char* key, const nlohmann::json& value) {
     nlohmann::json params = base;
     params[key] = value;
@@ -371,13 +381,19 @@ INSTANTIATE_TEST_SUITE_P(ImageClouds, CapturedWood,
 // draws what it drew before; the far images hold the wood the geometry no longer draws.
 TEST_F(WoodInImpostors, FarCloudCapturesTheWoodWithinItsOwnBound) {
   auto reference = test::bakeAndUpload(device, tree, "polygonal", nlohmann::json::object());
-  auto shared = test::bakeAndUpload(device, tree, "billboard_cloud", {{"wood_capture_px", 2.0}},
+  // The fixed alpha test, as CapturedWood explains.
+  const auto with = [](double middlePixels, double farPixels) {
+    return nlohmann::json{{"wood_capture_px", middlePixels},
+                          {"wood_capture_far_px", farPixels},
+                          {"alpha_test", "fixed"}};
+  };
+  auto shared = test::bakeAndUpload(device, tree, "billboard_cloud", with(2.0, 0.0),
                                     Shading::kUnlit, "shared");
-  auto ownFar = test::bakeAndUpload(device, tree, "billboard_cloud",
-                                    {{"wood_capture_px", 2.0}, {"wood_capture_far_px", 8.0}},
+  auto ownFar = test::bakeAndUpload(device, tree, "billboard_cloud", with(2.0, 8.0),
                                     Shading::kUnlit, "own far");
-  auto woodless = test::bakeAndUpload(device, tree, "billboard_cloud", {{"wood", false}},
-                                      Shading::kUnlit, "woodless");
+  auto woodless =
+      test::bakeAndUpload(device, tree, "billboard_cloud",
+                          {{"wood", false}, {"alpha_test", "fixed"}}, Shading::kUnlit, "woodless");
   const nlohmann::json captured = ownFar->bakeReport().at("wood_captured");
   const auto sharedTriangles = captured.at("triangles").get<size_t>();
   EXPECT_EQ(sharedTriangles,
@@ -475,10 +491,16 @@ TEST(WoodLevelsDrawn, SolidWoodCullsBackFacesInEveryMethod) {
   Harness harness(device, settings);
   harness.setTree(solid.bounds, solid.leaves.size());
   const Camera camera = orbitCamera(solid.bounds, {1.5f, 10.0f, 0.0f}, 40.0f);
+  // At 1.5 radii of 128 px the classic cloud draws its middle cloud: without captured wood, so
+  // that it draws the full chain, which is culled (a residual level is open and never culled).
   for (const std::string name : {"polygonal", "billboard_cloud"}) {
+    const nlohmann::json params =
+        name == "polygonal"
+            ? nlohmann::json::object()
+            : nlohmann::json{{"wood_capture_px", 0.0}, {"wood_capture_far_px", 0.0}};
     const auto render = [&](const Tree& tree, bool culled) {
-      auto method = test::bakeAndUpload(device, tree, name, nlohmann::json::object(),
-                                        Shading::kUnlit, name + (culled ? " culled" : ""));
+      auto method = test::bakeAndUpload(device, tree, name, params, Shading::kUnlit,
+                                        name + (culled ? " culled" : ""));
       EXPECT_EQ(method->bakeReport().at("wood_back_faces_culled").get<bool>(), culled) << name;
       DrawnStats drawn;
       const ImageRgbaF image = harness.renderLinearAt(*method, camera, 128, 128, &drawn);
