@@ -492,7 +492,8 @@ TEST(WoodLevelsDrawn, SolidWoodCullsBackFacesInEveryMethod) {
   harness.setTree(solid.bounds, solid.leaves.size());
   const Camera camera = orbitCamera(solid.bounds, {1.5f, 10.0f, 0.0f}, 40.0f);
   // At 1.5 radii of 128 px the classic cloud draws its middle cloud: without captured wood, so
-  // that it draws the full chain, which is culled (a residual level is open and never culled).
+  // that it draws the full chain, a closed mesh (a residual level is open, and culling it
+  // changes the image: WoodRenderer::draw says why it is culled all the same).
   for (const std::string name : {"polygonal", "billboard_cloud"}) {
     const nlohmann::json params =
         name == "polygonal"
