@@ -77,16 +77,8 @@ class BillboardCloudMethod final : public Method {
     mParams.cloud.resolve("billboard_cloud");
     // Without coarse clouds there are no images to hold wood, and without wood nothing to
     // hold: the effective parameters say that no wood is captured.
-    if (!mParams.cloud.lod || !mParams.wood.draw) {
-      mParams.woodCapturePixels = 0.0f;
-      mParams.woodCaptureFarPixels = 0.0f;
-    }
-    if (mParams.woodCaptureFarPixels > 0.0f &&
-        mParams.woodCaptureFarPixels < mParams.woodCapturePixels)
-      throwInputError(
-          "billboard_cloud: parameter 'wood_capture_far_px' ({}) must be at least "
-          "'wood_capture_px' ({}), or be 0",
-          mParams.woodCaptureFarPixels, mParams.woodCapturePixels);
+    resolveWoodCapture("billboard_cloud", mParams.cloud.lod, mParams.wood.draw,
+                       mParams.woodCapturePixels, mParams.woodCaptureFarPixels);
   }
 
   void bake(const Tree& tree, BakeContext& ctx) override {

@@ -6,6 +6,8 @@
 
 #include <glm/geometric.hpp>
 
+#include "common/error.h"
+
 namespace canopy {
 
 std::vector<std::vector<uint32_t>> assignWoodToBillboards(const WoodMesh& wood,
@@ -111,6 +113,18 @@ WoodInImages captureWoodInImages(const Tree& tree, const std::vector<BillboardCl
       {"triangles", count}, {"max_plane_distance", bounds}, {"below_px", largestPixels.front()}};
   if (ownFar) result.report["far"] = farReport;
   return result;
+}
+
+void resolveWoodCapture(const char* method, bool lod, bool wood, float& capturePixels,
+                        float& farCapturePixels) {
+  if (!lod || !wood) {
+    capturePixels = 0.0f;
+    farCapturePixels = 0.0f;
+  }
+  if (farCapturePixels > 0.0f && farCapturePixels < capturePixels)
+    throwInputError(
+        "{}: parameter 'wood_capture_far_px' ({}) must be at least 'wood_capture_px' ({}), or be 0",
+        method, farCapturePixels, capturePixels);
 }
 
 }  // namespace canopy

@@ -38,4 +38,10 @@ WoodInImages captureWoodInImages(const Tree& tree, const std::vector<BillboardCl
                                  size_t firstImageCloud, const std::vector<float>& largestPixels,
                                  float capturePixels, float farCapturePixels = 0.0f);
 
+// A method's `wood_capture_px` / `wood_capture_far_px` as they take effect, written back in
+// place: both 0 without coarse images to hold wood (`lod` off) or wood to hold (`wood` off);
+// otherwise a far bound below the near one is an input error naming `method`'s parameter.
+void resolveWoodCapture(const char* method, bool lod, bool wood, float& capturePixels,
+                        float& farCapturePixels);
+
 }  // namespace canopy

@@ -49,6 +49,7 @@ struct MultilayerParams {
   float parallaxMaxAngle = 70.0f;
   float lodLowResPixels = 0.0f;
   float woodCapturePixels = 0.0f;
+  float woodCaptureFarPixels = 0.0f;
   int viewOrders = 0;
   WoodParams wood;
 
@@ -98,7 +99,14 @@ struct MultilayerParams {
       "the clouds drawn as low-resolution textures only (below lod_lowres_px, or lod_far_px) "
       "also hold the wood lying (every corner) within this many output pixels of one of their "
       "billboards, measured at the largest projected size each is drawn at; trees drawn with "
-      "them draw only the rest of the wood as geometry (0: leaves only; needs lod)");
+      "them draw only the rest of the wood as geometry (0: leaves only; 0 in effect without lod "
+      "or wood)");
+    v("wood_capture_far_px", woodCaptureFarPixels, 0.0f, 100.0f,
+      "the far cloud's own bound instead (0: wood_capture_px's): its low-resolution images hold "
+      "the wood within this many output pixels of its billboards at its largest projected size "
+      "(lod_far_px), and trees drawn with it draw only the rest; a middle cloud drawn as images "
+      "(lod_lowres_px) keeps what wood_capture_px gives both (at least wood_capture_px; 0 in "
+      "effect without lod or wood)");
   }
 };
 
@@ -179,6 +187,8 @@ class MultilayerIndirect final : public Method {
           "multilayer_indirect: parameter 'lod_lowres_px' ({}) must lie between 'lod_far_px' ({}) "
           "and 'lod_near_px' ({}) with 'lod' on, or be 0",
           mParams.lodLowResPixels, cloud.lodFarPixels, cloud.lodNearPixels);
+    resolveWoodCapture("multilayer_indirect", cloud.lod, mParams.wood.draw,
+                       mParams.woodCapturePixels, mParams.woodCaptureFarPixels);
   }
 
   void bake(const Tree& tree, BakeContext& ctx) override {
@@ -189,7 +199,7 @@ class MultilayerIndirect final : public Method {
     const std::vector<float> imageLevels = lowResOnlyThresholds();
     const WoodInImages woodInImages = captureWoodInImages(
         tree, clouds, clouds.size() - std::min(clouds.size(), imageLevels.size()), imageLevels,
-        mParams.wood.draw && mParams.cloud.lod ? mParams.woodCapturePixels : 0.0f);
+        mParams.woodCapturePixels, mParams.woodCaptureFarPixels);
     mWood.bake(tree, mParams.wood.levels(), woodInImages.captured);
     const WoodColorSampler woodColors(tree);
     std::vector<const Billboard*> billboards;

@@ -378,22 +378,32 @@ INSTANTIATE_TEST_SUITE_P(ImageClouds, CapturedWood,
 
 // wood_capture_far_px: the far cloud holds the wood within its own, larger bound, so a far tree
 // draws less wood than with wood_capture_px alone, while a tree drawn with the middle cloud
-// draws what it drew before; the far images hold the wood the geometry no longer draws.
-TEST_F(WoodInImpostors, FarCloudCapturesTheWoodWithinItsOwnBound) {
+// draws what it drew before; the far images hold the wood the geometry no longer draws. The
+// multi-layer middle cloud is drawn as images below lod_lowres_px (90 px here), as the classic
+// one always is.
+class FarCloudWood : public WoodInImpostors, public testing::WithParamInterface<const char*> {};
+
+TEST_P(FarCloudWood, CapturesTheWoodWithinItsOwnBound) {
+  const std::string method = GetParam();
   auto reference = test::bakeAndUpload(device, tree, "polygonal", nlohmann::json::object());
-  // The fixed alpha test, as CapturedWood explains.
-  const auto with = [](double middlePixels, double farPixels) {
-    return nlohmann::json{{"wood_capture_px", middlePixels},
-                          {"wood_capture_far_px", farPixels},
-                          {"alpha_test", "fixed"}};
+  // The classic cloud: the fixed alpha test, as CapturedWood explains. Multi-layer: planes and
+  // texels sized for this 400-leaf tree, as there.
+  const nlohmann::json base =
+      method == "multilayer_indirect"
+          ? nlohmann::json{{"clusters", 60}, {"lowres_texels_per_cell", 2}, {"lod_lowres_px", 90.0}}
+          : nlohmann::json{{"alpha_test", "fixed"}};
+  const auto with = [&](const nlohmann::json& wood) {
+    nlohmann::json params = base;
+    params.update(wood);
+    return params;
   };
-  auto shared = test::bakeAndUpload(device, tree, "billboard_cloud", with(2.0, 0.0),
-                                    Shading::kUnlit, "shared");
-  auto ownFar = test::bakeAndUpload(device, tree, "billboard_cloud", with(2.0, 8.0),
-                                    Shading::kUnlit, "own far");
-  auto woodless =
-      test::bakeAndUpload(device, tree, "billboard_cloud",
-                          {{"wood", false}, {"alpha_test", "fixed"}}, Shading::kUnlit, "woodless");
+  const auto capture = [&](double middlePixels, double farPixels) {
+    return with({{"wood_capture_px", middlePixels}, {"wood_capture_far_px", farPixels}});
+  };
+  auto shared =
+      test::bakeAndUpload(device, tree, method, capture(2.0, 0.0), Shading::kUnlit, "shared");
+  auto ownFar =
+      test::bakeAndUpload(device, tree, method, capture(2.0, 8.0), Shading::kUnlit, "own far");
   const nlohmann::json captured = ownFar->bakeReport().at("wood_captured");
   const auto sharedTriangles = captured.at("triangles").get<size_t>();
   EXPECT_EQ(sharedTriangles,
@@ -413,13 +423,18 @@ TEST_F(WoodInImpostors, FarCloudCapturesTheWoodWithinItsOwnBound) {
     EXPECT_EQ(farDrawn.woodInstancesPerLevel[level], 0u) << level;
   EXPECT_LT(farDrawn.counts.primitives, sharedDrawn.counts.primitives);
   // Its images hold that wood: coverage nearer the drawn wood's than the woodless cloud's
-  // (measured: 0.278 against 0.194 drawing the residual of 2 px, 0.490 without wood; 102
-  // primitives against 1,488).
-  const double sharedError = compareImages(referenceImage, sharedImage).coverageError;
-  const double farError = compareImages(referenceImage, farImage).coverageError;
-  const double woodlessError =
-      compareImages(referenceImage, drawAt(*woodless, 8.0f).second).coverageError;
-  EXPECT_LT(farError, 0.5 * (sharedError + woodlessError)) << sharedError << " " << woodlessError;
+  // (measured, classic cloud: 0.278 against 0.194 drawing the residual of 2 px, 0.490 without
+  // wood; 102 primitives against 1,488). Not asserted for multi-layer, whose low-resolution
+  // texels are too coarse for this tree's thin branches (CapturedWood).
+  if (method == "billboard_cloud") {
+    auto woodless = test::bakeAndUpload(device, tree, method, with({{"wood", false}}),
+                                        Shading::kUnlit, "woodless");
+    const double sharedError = compareImages(referenceImage, sharedImage).coverageError;
+    const double farError = compareImages(referenceImage, farImage).coverageError;
+    const double woodlessError =
+        compareImages(referenceImage, drawAt(*woodless, 8.0f).second).coverageError;
+    EXPECT_LT(farError, 0.5 * (sharedError + woodlessError)) << sharedError << " " << woodlessError;
+  }
   // 3 radii: about 59 px, the middle cloud, with the first residual chain as before.
   const auto [sharedMiddle, sharedMiddleImage] = drawAt(*shared, 3.0f);
   const auto [farMiddle, farMiddleImage] = drawAt(*ownFar, 3.0f);
@@ -433,8 +448,7 @@ TEST_F(WoodInImpostors, FarCloudCapturesTheWoodWithinItsOwnBound) {
   test::TempDir dir;
   AssetFolder asset(dir.path());
   ownFar->save(asset);
-  auto loaded =
-      builtinMethods().find("billboard_cloud").create(ownFar->effectiveParams(), "loaded");
+  auto loaded = builtinMethods().find(method).create(ownFar->effectiveParams(), "loaded");
   AssetFolder reader(dir.path());
   loaded->load(reader);
   {
@@ -443,6 +457,35 @@ TEST_F(WoodInImpostors, FarCloudCapturesTheWoodWithinItsOwnBound) {
   }
   EXPECT_EQ(drawAt(*loaded, 8.0f).second.pixels, farImage.pixels);
   EXPECT_EQ(gl::api().GetError(), static_cast<GLenum>(GL_NO_ERROR));
+}
+
+INSTANTIATE_TEST_SUITE_P(ImageClouds, FarCloudWood,
+                         testing::Values("billboard_cloud", "multilayer_indirect"));
+
+// The capture bounds as they take effect: a far bound below the near one is refused naming it;
+// without coarse clouds, or without wood, nothing is captured and the written-back parameters
+// say so.
+TEST_P(FarCloudWood, BoundsAreCheckedAndWrittenBackAsTheyTakeEffect) {
+  const auto& create = builtinMethods().find(GetParam()).create;
+  for (const nlohmann::json& farBelowMiddle :
+       {nlohmann::json{{"wood_capture_px", 8.0}, {"wood_capture_far_px", 4.0}},
+        nlohmann::json{{"wood_capture_px", 20.0}, {"wood_capture_far_px", 16.0}}}) {
+    try {
+      create(farBelowMiddle, "test");
+      ADD_FAILURE() << farBelowMiddle.dump() << " was accepted";
+    } catch (const InputError& error) {
+      EXPECT_NE(std::string(error.what()).find("wood_capture_far_px"), std::string::npos);
+    }
+  }
+  for (const nlohmann::json& nothingToCapture :
+       {nlohmann::json{{"lod", false}, {"wood_capture_px", 4.0}, {"wood_capture_far_px", 8.0}},
+        nlohmann::json{{"wood", false}, {"wood_capture_px", 4.0}, {"wood_capture_far_px", 8.0}}}) {
+    const auto method = create(nothingToCapture, "test");
+    EXPECT_EQ(method->effectiveParams().at("wood_capture_px"), 0.0) << nothingToCapture.dump();
+    EXPECT_EQ(method->effectiveParams().at("wood_capture_far_px"), 0.0) << nothingToCapture.dump();
+  }
+  const auto method = create({{"wood_capture_px", 2.0}, {"wood_capture_far_px", 8.0}}, "test");
+  EXPECT_EQ(method->effectiveParams().at("wood_capture_far_px"), 8.0);
 }
 
 // lod_lowres_px: between it and lod_far_px the multi-layer middle cloud is drawn without its
