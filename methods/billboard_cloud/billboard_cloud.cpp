@@ -32,7 +32,10 @@ struct BillboardCloudParams {
   std::string compression = "none";
   bool backCapture = true;
   float woodCapturePixels = 3.0f;
-  float woodCaptureFarPixels = 16.0f;
+  // 0: the far cloud holds what both coarse clouds hold. 16 px (the default of 873fbdf) drew the
+  // 1,000-tree forest 15% faster but scattered the bare branches of far sparse trees into
+  // brown blobs: 22 radii 16.1 against 18.7 dB (docs/METHODS.md, "the far cloud's own bound").
+  float woodCaptureFarPixels = 0.0f;
   std::string alphaTest = "hashed";
 
   template <class Visitor>

@@ -158,8 +158,6 @@ TEST(ClusteringBadInput, ClusterCountOutOfRangeNamesTheParameter) {
   EXPECT_THROW(create({{"lod_near_px", 30.0}, {"lod_far_px", 60.0}}, "test"), InputError);
   EXPECT_THROW(create({{"clusters", 100}, {"clusters_mid", 200}}, "test"), InputError);
   EXPECT_THROW(create({{"clusters_mid", 20}, {"clusters_far", 30}}, "test"), InputError);
-  // The default far bound (16 px) lies below this near one (FarCloudWood checks the message).
-  EXPECT_THROW(create({{"wood_capture_px", 20.0}}, "test"), InputError);
   // Unset coarse counts are written back as the counts used: K/3 and K/10.
   const auto method = create({{"clusters", 100}}, "test");
   EXPECT_EQ(method->effectiveParams().at("clusters_mid"), 33);
