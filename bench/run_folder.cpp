@@ -73,6 +73,15 @@ RunFolder::RunFolder(std::filesystem::path directory, const RunIdentity& identit
   }
   if (resume) {
     if (meta && meta->runs) mEarlierRuns = *meta->runs;
+    // An interrupted run's records stay; its start is kept so the folder says it ran in parts.
+    if (meta && !finished) {
+      mEarlierRuns.push_back({{"started", meta->started ? *meta->started : "unknown"},
+                              {"finished", nullptr},
+                              {"interrupted", true},
+                              {"code_version", code},
+                              {"gl_renderer", meta->gl.renderer},
+                              {"shard", meta->shard ? *meta->shard : "0/1"}});
+    }
     return;
   }
   if (policy == ResumePolicy::kResume) {

@@ -38,7 +38,8 @@ class RunFolder {
   const std::filesystem::path& directory() const { return mDirectory; }
   // Where an earlier run was moved, if one was.
   const std::optional<std::filesystem::path>& movedAside() const { return mMovedAside; }
-  // meta.json's "runs" of the run being resumed (empty for a new one).
+  // meta.json's "runs" of the run being resumed (empty for a new one), plus an entry with
+  // "interrupted": true and "finished": null when the resumed run had not finished.
   const nlohmann::json& earlierRuns() const { return mEarlierRuns; }
 
  private:

@@ -26,7 +26,7 @@ struct RunMeta {
     }
   };
   std::string experiment;
-  Absent<std::string> configHash, codeVersion, finished;
+  Absent<std::string> configHash, codeVersion, started, finished;
   Absent<std::string> shard;  // "I/N" of a shard run
   Gl gl;
   Absent<std::vector<nlohmann::json>> runs;  // earlier runs resumed into this folder
@@ -36,6 +36,7 @@ struct RunMeta {
     v("experiment", experiment);
     v("config_hash", configHash);
     v("code_version", codeVersion);
+    v("started", started);
     v("finished", finished);
     v("shard", shard);
     v("gl", gl);

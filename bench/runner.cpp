@@ -212,6 +212,8 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
   Harness harness(device, config.views.render);
   RunContext run{config, options, store, device, harness, context->renderer()};
   nlohmann::json meta = runMeta(config, options, *context, harness);
+  // The parts before this one, so an interruption of this part keeps them too.
+  meta["runs"] = folder.earlierRuns();
   writeTextAtomically(metaPath, meta.dump(2));
   spdlog::info("{}: {} tree(s) × {} method variant(s) on {} ({}), into {}", config.name,
                config.trees.size(), config.variants.size(), run.renderer,
@@ -226,14 +228,11 @@ void runExperiment(const ExperimentConfig& config, const RunOptions& options) {
   const auto rows = summarize(store.records());
   writeSummaries(options.outDirectory, store.records(), config.name, run.renderer);
   meta["finished"] = isoTimestampUtc();
-  nlohmann::json runs = folder.earlierRuns();
-  runs.push_back({{"started", meta["started"]},
-                  {"finished", meta["finished"]},
-                  {"git_commit", meta["git_commit"]},
-                  {"code_version", meta["code_version"]},
-                  {"gl_renderer", run.renderer},
-                  {"shard", meta["shard"]}});
-  meta["runs"] = runs;
+  const nlohmann::json thisPart = {
+      {"started", meta["started"]},       {"finished", meta["finished"]},
+      {"git_commit", meta["git_commit"]}, {"code_version", meta["code_version"]},
+      {"gl_renderer", run.renderer},      {"shard", meta["shard"]}};
+  meta["runs"].push_back(thisPart);
   writeTextAtomically(metaPath, meta.dump(2));
   spdlog::info("{}: results in {}", config.name, options.outDirectory.string());
   if (options.printTable && !rows.empty())

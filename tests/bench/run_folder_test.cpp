@@ -83,9 +83,11 @@ TEST_F(RunFolderCli, AChangedConfigIsRefusedAndFreshMovesTheOldRunAside) {
 TEST_F(RunFolderCli, ResumeOrFreshResumesAnUnfinishedRunAndRedoesAFinishedOne) {
   ASSERT_EQ(run(48), 0);
   const size_t complete = recordsOf(out()).size();
-  // An interrupted run: its meta.json has no "finished" and some records are missing.
+  // An interrupted run: its meta.json is the one written at its start (no "finished", no part
+  // of its own in "runs") and some records are missing.
   nlohmann::json meta = readJsonFile((out() / "meta.json").string());
   meta.erase("finished");
+  meta["runs"] = nlohmann::json::array();
   test::writeText(out() / "meta.json", meta.dump());
   const auto records = recordsOf(out());
   std::string partial;
@@ -94,6 +96,13 @@ TEST_F(RunFolderCli, ResumeOrFreshResumesAnUnfinishedRunAndRedoesAFinishedOne) {
   ASSERT_EQ(run(48, "--resume-or-fresh"), 0);
   EXPECT_TRUE(previousRuns(mDir).empty()) << "resumed in place";
   EXPECT_EQ(recordsOf(out()).size(), complete);
+  // The folder says it ran in two parts: the interrupted start, then the part that finished.
+  const auto runs = readJsonFile((out() / "meta.json").string()).at("runs");
+  ASSERT_EQ(runs.size(), 2u) << runs.dump();
+  EXPECT_EQ(runs[0].at("started"), meta.at("started"));
+  EXPECT_TRUE(runs[0].at("finished").is_null());
+  EXPECT_TRUE(runs[0].at("interrupted").get<bool>());
+  EXPECT_FALSE(runs[1].at("finished").is_null());
   // A finished run is done again (the committed-results case of `make bench`).
   ASSERT_EQ(run(48, "--resume-or-fresh"), 0);
   EXPECT_EQ(previousRuns(mDir).size(), 1u);
