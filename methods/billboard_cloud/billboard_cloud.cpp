@@ -136,6 +136,25 @@ class BillboardCloudMethod final : public Method {
     }
     const AtlasLayout& layout = atlas.layout;
     mReport["atlas"] = {layout.width, layout.height};
+    warnOnUnitMismatch(tree, layout);
+  }
+
+  // `density` is in the tree's own units, so a tree modelled in other units than the presets'
+  // metres gets an atlas far from what the defaults were measured at (docs/METHODS.md: a 75-unit
+  // radius asset took 1.3 GB at 16 texels a unit). The texels per bounding radius go in the
+  // report, and a bake far above the measured ones (40 to 120 on the presets) says which key to
+  // set. Below them the atlas is only coarser; the memory knob covers that.
+  void warnOnUnitMismatch(const Tree& tree, const AtlasLayout& layout) {
+    const float radius = tree.boundingSphereRadius();
+    const float texelsPerRadius = mParams.density * radius;
+    mReport["texels_per_bounding_radius"] = texelsPerRadius;
+    if (texelsPerRadius <= kMeasuredTexelsPerRadius * kUnitMismatchFactor) return;
+    spdlog::warn(
+        "billboard_cloud: parameter 'density' = {} texels a unit gives {:.0f} texels per bounding "
+        "radius ({:.3g} units) and a {}x{} atlas; the defaults were measured at about {:.0f} "
+        "(density {:.3g} for this tree)",
+        mParams.density, texelsPerRadius, radius, layout.width, layout.height,
+        kMeasuredTexelsPerRadius, kMeasuredTexelsPerRadius / radius);
   }
 
   void upload(gl::Device& device) override {
@@ -216,6 +235,10 @@ class BillboardCloudMethod final : public Method {
 
  private:
   static constexpr int kMaxAtlas = 16384;
+  // Texels per bounding radius of broadleaf at the default density, and how far above it a bake
+  // is warned about.
+  static constexpr float kMeasuredTexelsPerRadius = 120.0f;
+  static constexpr float kUnitMismatchFactor = 4.0f;
   BillboardCloudParams mParams;
   nlohmann::json mReport;
   CloudLevels mLevels;

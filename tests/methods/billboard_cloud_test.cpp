@@ -5,6 +5,8 @@
 #include <cmath>
 #include <set>
 
+#include <spdlog/sinks/ringbuffer_sink.h>
+#include <spdlog/spdlog.h>
 #include <glm/geometric.hpp>
 
 #include "bench/harness.h"
@@ -162,6 +164,38 @@ TEST(ClusteringBadInput, ClusterCountOutOfRangeNamesTheParameter) {
   const auto method = create({{"clusters", 100}}, "test");
   EXPECT_EQ(method->effectiveParams().at("clusters_mid"), 33);
   EXPECT_EQ(method->effectiveParams().at("clusters_far"), 10);
+}
+
+// `density` is per unit of the tree's own length: the bake reports what it gives per bounding
+// radius, and warns, naming the key, when that is far above what the defaults were measured at
+// (a tree modelled in other units than metres).
+TEST(BillboardCloudDensity, TexelsPerRadiusAreReportedAndATreeInOtherUnitsIsWarnedAbout) {
+  const Tree tree = test::smallTree(50);
+  const float radius = tree.boundingSphereRadius();
+  auto sink = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(16);
+  const auto previous = spdlog::default_logger();
+  spdlog::set_default_logger(std::make_shared<spdlog::logger>("density_test", sink));
+  const auto bake = [&](float density) {
+    auto method =
+        builtinMethods()
+            .find("billboard_cloud")
+            .create({{"density", density}, {"clusters", 8}, {"lod", false}, {"supersample", 1}},
+                    "test");
+    BakeContext context;
+    method->bake(tree, context);
+    return method->bakeReport().at("texels_per_bounding_radius").get<float>();
+  };
+  const float measured =
+      120.0f;  // about broadleaf's at the default density, which it warns against
+  EXPECT_NEAR(bake(16.0f), 16.0f * radius, 1e-3f * radius);
+  EXPECT_TRUE(sink->last_formatted().empty()) << "a tree in metres is not warned about";
+  const float tooDense = 5.0f * measured / radius;  // as if the tree were in units 5x smaller
+  EXPECT_NEAR(bake(tooDense), 5.0f * measured, 1e-2f * measured);
+  spdlog::set_default_logger(previous);
+  const auto logged = sink->last_formatted();
+  ASSERT_EQ(logged.size(), 1u);
+  EXPECT_NE(logged[0].find("'density'"), std::string::npos) << logged[0];
+  EXPECT_NE(logged[0].find("warning"), std::string::npos) << logged[0];
 }
 
 TEST(ClusteringSmallTree, MoreClustersThanLeavesGivesOnePlanePerLeaf) {
