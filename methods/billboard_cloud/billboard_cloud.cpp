@@ -136,7 +136,7 @@ class BillboardCloudMethod final : public Method {
     }
     const AtlasLayout& layout = atlas.layout;
     mReport["atlas"] = {layout.width, layout.height};
-    warnOnUnitMismatch(tree, layout);
+    reportTexelsPerRadius(tree, layout);
   }
 
   // `density` is in the tree's own units, so a tree modelled in other units than the presets'
@@ -144,7 +144,7 @@ class BillboardCloudMethod final : public Method {
   // radius asset took 1.3 GB at 16 texels a unit). The texels per bounding radius go in the
   // report, and a bake far above the measured ones (40 to 120 on the presets) says which key to
   // set. Below them the atlas is only coarser; the memory knob covers that.
-  void warnOnUnitMismatch(const Tree& tree, const AtlasLayout& layout) {
+  void reportTexelsPerRadius(const Tree& tree, const AtlasLayout& layout) {
     const float radius = tree.boundingSphereRadius();
     const float texelsPerRadius = mParams.density * radius;
     mReport["texels_per_bounding_radius"] = texelsPerRadius;

@@ -185,8 +185,8 @@ TEST(BillboardCloudDensity, TexelsPerRadiusAreReportedAndATreeInOtherUnitsIsWarn
     method->bake(tree, context);
     return method->bakeReport().at("texels_per_bounding_radius").get<float>();
   };
-  const float measured =
-      120.0f;  // about broadleaf's at the default density, which it warns against
+  // Texels per radius the method measures against: about broadleaf's at the default density.
+  const float measured = 120.0f;
   EXPECT_NEAR(bake(16.0f), 16.0f * radius, 1e-3f * radius);
   EXPECT_TRUE(sink->last_formatted().empty()) << "a tree in metres is not warned about";
   const float tooDense = 5.0f * measured / radius;  // as if the tree were in units 5x smaller
