@@ -36,6 +36,7 @@ struct BillboardCloudParams {
   // 1,000-tree forest 15% faster but scattered the bare branches of far sparse trees into
   // brown blobs: 22 radii 16.1 against 18.7 dB (docs/METHODS.md, "the far cloud's own bound").
   float woodCaptureFarPixels = 0.0f;
+  bool woodCaptureParts = false;
   std::string alphaTest = "hashed";
 
   template <class Visitor>
@@ -63,6 +64,10 @@ struct BillboardCloudParams {
       "this many output pixels of its billboards at its largest projected size (lod_far_px), "
       "and trees drawn with it draw only the rest; the middle cloud keeps what wood_capture_px "
       "gives both clouds (at least wood_capture_px; 0 in effect without lod or wood)");
+    v("wood_capture_parts", woodCaptureParts,
+      "capture the wood a connected part at a time (a branch segment's tube): whole into the "
+      "nearest billboard that holds all of it within the bound, or not at all (false: each "
+      "triangle on its own, into the billboard it faces most squarely)");
     v("alpha_test", alphaTest, {"fixed", "hashed"},
       "the atlas' alpha test: at 0.5 everywhere, as the reference tests its leaf cards; or, "
       "where the atlas is minified (its mip levels average several texels), against a threshold "
@@ -82,6 +87,8 @@ class BillboardCloudMethod final : public Method {
     // hold: the effective parameters say that no wood is captured.
     resolveWoodCapture("billboard_cloud", mParams.cloud.lod, mParams.wood.draw,
                        mParams.woodCapturePixels, mParams.woodCaptureFarPixels);
+    if (mParams.woodCapturePixels <= 0.0f && mParams.woodCaptureFarPixels <= 0.0f)
+      mParams.woodCaptureParts = false;
   }
 
   void bake(const Tree& tree, BakeContext& ctx) override {
@@ -107,7 +114,7 @@ class BillboardCloudMethod final : public Method {
     // The middle and far clouds' images hold the wood trees drawn with them do not draw.
     const WoodInImages woodInImages = captureWoodInImages(
         tree, clouds, 1, {mParams.cloud.lodNearPixels, mParams.cloud.lodFarPixels},
-        mParams.woodCapturePixels, mParams.woodCaptureFarPixels);
+        mParams.woodCapturePixels, mParams.woodCaptureFarPixels, mParams.woodCaptureParts);
     mReport["wood_captured"] = woodInImages.report;
     mWood.bake(tree, mParams.wood.levels(), woodInImages.captured);
     const AtlasLayout preview = packAtlas(sizes, kAtlasPadding, kAtlasAlignment);

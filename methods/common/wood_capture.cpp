@@ -1,14 +1,95 @@
 #include "methods/common/wood_capture.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <optional>
 
 #include <glm/geometric.hpp>
 
 #include "common/error.h"
 
 namespace canopy {
+
+namespace {
+
+// The largest distance of `corners` from the billboard's plane when every corner projects into
+// its rectangle; nothing when one does not.
+template <class Corners>
+std::optional<float> planeDistanceInside(const Billboard& billboard, const Corners& corners) {
+  float distance = 0.0f;
+  for (const glm::vec3& p : corners) {
+    const glm::vec2 q = billboard.toPlane(p);
+    if (std::abs(q.x) > billboard.halfExtents.x || std::abs(q.y) > billboard.halfExtents.y)
+      return std::nullopt;
+    distance = std::max(distance, std::abs(glm::dot(p - billboard.center, billboard.normal)));
+  }
+  return distance;
+}
+
+// Union-find over triangles with path halving.
+uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t i) {
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+}  // namespace
+
+std::vector<uint32_t> woodParts(const WoodMesh& wood) {
+  const auto triangles = static_cast<uint32_t>(wood.triangleCount());
+  std::vector<uint32_t> parent(triangles);
+  for (uint32_t t = 0; t < triangles; ++t) parent[t] = t;
+  // The first triangle seen at each position: files split vertices along seams, so positions,
+  // not indices, say which triangles touch.
+  std::map<std::array<float, 3>, uint32_t> firstAt;
+  for (uint32_t t = 0; t < triangles; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const glm::vec3& p = wood.positions[wood.indices[t * 3 + k]];
+      const auto [it, inserted] = firstAt.try_emplace({p.x, p.y, p.z}, t);
+      if (!inserted) parent[findRoot(parent, t)] = findRoot(parent, it->second);
+    }
+  }
+  // Parts numbered in the order of their first triangle, so the numbering is deterministic.
+  std::vector<uint32_t> part(triangles), number(triangles, triangles);
+  uint32_t parts = 0;
+  for (uint32_t t = 0; t < triangles; ++t) {
+    const uint32_t root = findRoot(parent, t);
+    if (number[root] == triangles) number[root] = parts++;
+    part[t] = number[root];
+  }
+  return part;
+}
+
+std::vector<std::vector<uint32_t>> assignWoodPartsToBillboards(
+    const WoodMesh& wood, const std::vector<uint32_t>& parts,
+    const std::vector<Billboard>& billboards, float maxDistance) {
+  const uint32_t partCount =
+      parts.empty() ? 0u : *std::max_element(parts.begin(), parts.end()) + 1u;
+  std::vector<std::vector<glm::vec3>> corners(partCount);
+  for (size_t t = 0; t < parts.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      corners[parts[t]].push_back(wood.positions[wood.indices[t * 3 + k]]);
+  // The nearest plane, whatever the part faces: on the presets' far rings it beat the plane the
+  // part shows most area to (docs/METHODS.md, "the far cloud's own bound").
+  std::vector<size_t> target(partCount, billboards.size());
+  for (uint32_t part = 0; part < partCount; ++part) {
+    float bestDistance = std::numeric_limits<float>::max();
+    for (size_t b = 0; b < billboards.size(); ++b) {
+      const std::optional<float> distance = planeDistanceInside(billboards[b], corners[part]);
+      if (distance && *distance <= maxDistance && *distance < bestDistance) {
+        target[part] = b;
+        bestDistance = *distance;
+      }
+    }
+  }
+  std::vector<std::vector<uint32_t>> assigned(billboards.size());
+  for (size_t t = 0; t < parts.size(); ++t)
+    if (target[parts[t]] < billboards.size())
+      assigned[target[parts[t]]].push_back(static_cast<uint32_t>(t));
+  return assigned;
+}
 
 std::vector<std::vector<uint32_t>> assignWoodToBillboards(const WoodMesh& wood,
                                                           const std::vector<Billboard>& billboards,
@@ -22,18 +103,13 @@ std::vector<std::vector<uint32_t>> assignWoodToBillboards(const WoodMesh& wood,
                                        wood.positions[wood.indices[triangle * 3 + 2]] - a);
     const float length = glm::length(cross);
     const glm::vec3 normal = length > 0.0f ? cross / length : glm::vec3(0.0f);
+    const std::array<glm::vec3, 3> corners = {a, wood.positions[wood.indices[triangle * 3 + 1]],
+                                              wood.positions[wood.indices[triangle * 3 + 2]]};
     for (size_t b = 0; b < billboards.size(); ++b) {
       const Billboard& billboard = billboards[b];
-      float distance = 0.0f;
-      bool inside = true;
-      for (int k = 0; k < 3 && inside; ++k) {
-        const glm::vec3 p = wood.positions[wood.indices[triangle * 3 + k]];
-        const glm::vec2 q = billboard.toPlane(p);
-        inside =
-            std::abs(q.x) <= billboard.halfExtents.x && std::abs(q.y) <= billboard.halfExtents.y;
-        distance = std::max(distance, std::abs(glm::dot(p - billboard.center, billboard.normal)));
-      }
-      if (!inside || distance > maxDistance) continue;
+      const std::optional<float> inside = planeDistanceInside(billboard, corners);
+      if (!inside || *inside > maxDistance) continue;
+      const float distance = *inside;
       // Most squarely facing first: the facet keeps its projected area in that plane's image
       // from every view, as a leaf does in a plane of its orientation; then the nearest.
       const float alignment = std::abs(glm::dot(normal, billboard.normal));
@@ -51,7 +127,7 @@ std::vector<std::vector<uint32_t>> assignWoodToBillboards(const WoodMesh& wood,
 
 WoodInImages captureWoodInImages(const Tree& tree, const std::vector<BillboardCloud>& clouds,
                                  size_t firstImageCloud, const std::vector<float>& largestPixels,
-                                 float capturePixels, float farCapturePixels) {
+                                 float capturePixels, float farCapturePixels, bool wholeParts) {
   WoodInImages result;
   size_t total = 0;
   for (const BillboardCloud& cloud : clouds) total += cloud.billboards.size();
@@ -62,10 +138,14 @@ WoodInImages captureWoodInImages(const Tree& tree, const std::vector<BillboardCl
   const float radius = 0.5f * glm::length(tree.bounds.extent());
   const size_t triangles = tree.wood.triangleCount();
   const size_t imageClouds = clouds.size() - firstImageCloud;
+  const std::vector<uint32_t> parts = wholeParts ? woodParts(tree.wood) : std::vector<uint32_t>{};
   // Each image cloud's triangles within `pixels` of its billboards, and where they go.
   const auto within = [&](size_t c, float pixels, std::vector<bool>& held) {
     const float maxDistance = pixels * radius / largestPixels.at(c - firstImageCloud);
-    auto assigned = assignWoodToBillboards(tree.wood, clouds[c].billboards, maxDistance);
+    auto assigned =
+        wholeParts
+            ? assignWoodPartsToBillboards(tree.wood, parts, clouds[c].billboards, maxDistance)
+            : assignWoodToBillboards(tree.wood, clouds[c].billboards, maxDistance);
     held.assign(triangles, false);
     for (const auto& list : assigned)
       for (uint32_t t : list) held[t] = true;

@@ -406,6 +406,56 @@ TEST(WoodCapture, NearestPlaneWithinTheBoundHoldsTheTriangleAndTheImageShowsIt) 
   }
 }
 
+// wood_capture_parts: triangles that share a corner position are one part (files split vertices
+// along seams, so indices do not say it), and a part goes whole to the nearest plane that holds
+// every corner of it within the bound, or stays geometry whole.
+TEST(WoodCapture, PartsGoWholeToTheNearestPlaneThatHoldsThemOrStayGeometry) {
+  WoodMesh wood;
+  const auto addTriangle = [&](glm::vec3 a, glm::vec3 b, glm::vec3 c) {
+    for (const glm::vec3& p : {a, b, c}) {
+      wood.indices.push_back(uint32_t(wood.positions.size()));
+      wood.positions.push_back(p);
+      wood.normals.emplace_back(0.0f, 0.0f, 1.0f);
+      wood.uvs.emplace_back(0.0f);
+    }
+    wood.materialIds.push_back(0);
+  };
+  // Part 0, two triangles sharing an edge: 0.08 from plane 0 at most, 0.05 from plane 1.
+  addTriangle({-0.5f, -0.5f, 0.01f}, {0.5f, -0.5f, 0.01f}, {-0.5f, 0.5f, 0.02f});
+  addTriangle({0.5f, -0.5f, 0.01f}, {-0.5f, 0.5f, 0.02f}, {0.5f, 0.5f, 0.08f});
+  // Part 1, sharing a corner: its first triangle sticks out of both rectangles.
+  addTriangle({0.6f, 0.6f, 0.0f}, {1.5f, 0.6f, 0.0f}, {0.6f, 0.9f, 0.0f});
+  addTriangle({0.6f, 0.6f, 0.0f}, {0.9f, 0.6f, 0.0f}, {0.6f, 0.8f, 0.0f});
+  std::vector<Billboard> planes(2);
+  for (int i = 0; i < 2; ++i) {
+    planes[size_t(i)].center = {0.0f, 0.0f, 0.06f * float(i)};
+    planes[size_t(i)].halfExtents = {1.0f, 1.0f};
+  }
+  const std::vector<uint32_t> parts = woodParts(wood);
+  EXPECT_EQ(parts, (std::vector<uint32_t>{0, 0, 1, 1}));
+  const auto whole = assignWoodPartsToBillboards(wood, parts, planes, 0.1f);
+  EXPECT_TRUE(whole[0].empty()) << testing::PrintToString(whole[0]);
+  EXPECT_EQ(whole[1], (std::vector<uint32_t>{0, 1}))
+      << "part 0 whole in the plane nearest all of it";
+  // A triangle at a time, part 0 splits between the planes and part 1's inner triangle is taken.
+  const auto single = assignWoodToBillboards(wood, planes, 0.1f);
+  EXPECT_EQ(single[0], (std::vector<uint32_t>{0, 3}));
+  EXPECT_EQ(single[1], (std::vector<uint32_t>{1}));
+  // Below the part's distance to its nearest plane nothing holds it.
+  const auto tight = assignWoodPartsToBillboards(wood, parts, planes, 0.04f);
+  EXPECT_TRUE(tight[0].empty() && tight[1].empty());
+  // The method writes the option back as it takes effect: off where no wood is captured.
+  const auto& create = builtinMethods().find("billboard_cloud").create;
+  EXPECT_TRUE(create({{"wood_capture_parts", true}}, "test")
+                  ->effectiveParams()
+                  .at("wood_capture_parts")
+                  .get<bool>());
+  EXPECT_FALSE(create({{"wood_capture_parts", true}, {"lod", false}}, "test")
+                   ->effectiveParams()
+                   .at("wood_capture_parts")
+                   .get<bool>());
+}
+
 // alpha_test "hashed": where the atlas is minified its mip levels average several texels, and a
 // threshold hashed per pixel and primitive keeps that averaged coverage in expectation instead of
 // making it all or nothing at 0.5; where it is magnified the test stays at 0.5.
