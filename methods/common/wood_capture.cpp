@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <optional>
 
 #include <glm/geometric.hpp>
@@ -40,7 +41,7 @@ uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t i) {
 std::vector<uint32_t> woodParts(const WoodMesh& wood) {
   const auto triangles = static_cast<uint32_t>(wood.triangleCount());
   std::vector<uint32_t> parent(triangles);
-  for (uint32_t t = 0; t < triangles; ++t) parent[t] = t;
+  std::iota(parent.begin(), parent.end(), 0u);
   // The first triangle seen at each position: files split vertices along seams, so positions,
   // not indices, say which triangles touch.
   std::map<std::array<float, 3>, uint32_t> firstAt;
@@ -107,9 +108,9 @@ std::vector<std::vector<uint32_t>> assignWoodToBillboards(const WoodMesh& wood,
                                               wood.positions[wood.indices[triangle * 3 + 2]]};
     for (size_t b = 0; b < billboards.size(); ++b) {
       const Billboard& billboard = billboards[b];
-      const std::optional<float> inside = planeDistanceInside(billboard, corners);
-      if (!inside || *inside > maxDistance) continue;
-      const float distance = *inside;
+      const std::optional<float> within = planeDistanceInside(billboard, corners);
+      if (!within || *within > maxDistance) continue;
+      const float distance = *within;
       // Most squarely facing first: the facet keeps its projected area in that plane's image
       // from every view, as a leaf does in a plane of its orientation; then the nearest.
       const float alignment = std::abs(glm::dot(normal, billboard.normal));
