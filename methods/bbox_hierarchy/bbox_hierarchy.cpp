@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <numeric>
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_inverse.hpp>
@@ -37,6 +38,7 @@ struct BboxParams {
   float facingPower = 1.0f;
   float lodBias = 1.0f;
   WoodParams wood;
+  bool woodCapture = true;
 
   template <class Visitor>
   void visit(Visitor& v) {
@@ -72,6 +74,10 @@ struct BboxParams {
       "output pixels one box texel may span when the box is drawn as images (Fig. 5: 1); "
       "larger switches to images nearer the viewer: faster, coarser");
     wood.visit(v);
+    v("wood_capture", woodCapture,
+      "beyond the paper: the root box's images also hold the wood (opaque, its albedo), and a "
+      "tree drawn with the root box alone draws no wood geometry (false: every tree draws its "
+      "wood; false in effect without wood)");
   }
 };
 
@@ -102,6 +108,8 @@ struct AssetFields {
   std::vector<float> worldPerTexel;
   uint32_t leafFirstIndex = 0;
   size_t leafImages = 0;
+  float rootOnlyBelowPixels = 0.0f;  // wood_capture: trees below this draw the root box alone
+  Aabb treeBounds;                   // their projected radius is the tree's bounding radius
   template <class V>
   void visit(V& v) {
     v("nodes", nodes);
@@ -111,6 +119,8 @@ struct AssetFields {
     v("world_per_texel", worldPerTexel);
     v("leaf_first_index", leafFirstIndex);
     v("leaf_images", leafImages);
+    v("root_only_below_px", rootOnlyBelowPixels);
+    v("tree_bounds", treeBounds);
   }
 };
 
@@ -155,10 +165,11 @@ constexpr int kAtlasPadding = 4, kAtlasAlignment = 8;  // of the box image atlas
 
 class BboxHierarchy final : public Method {
  public:
-  explicit BboxHierarchy(BboxParams params) : mParams(std::move(params)) {}
+  explicit BboxHierarchy(BboxParams params) : mParams(std::move(params)) {
+    if (!mParams.wood.draw) mParams.woodCapture = false;
+  }
 
   void bake(const Tree& tree, BakeContext&) override {
-    mWood.bake(tree, mParams.wood.levels());
     const bool hasBranches = !tree.branches.empty();
     if (mParams.hierarchy == "branches" && !hasBranches) {
       throwInputError(
@@ -187,6 +198,16 @@ class BboxHierarchy final : public Method {
     // to fine in the atlas (§1, §6: progressive transmission).
     const LeafImageSampler sampler(tree);
     const std::vector<int32_t> textured = texturedCoarseToFine(mHierarchy);
+    // wood_capture: the root's images hold every wood triangle; trees drawn with the root box
+    // alone then draw an empty residual chain of the wood.
+    const bool captureWood = mParams.woodCapture && tree.wood.triangleCount() > 0 &&
+                             !textured.empty() && textured.front() == 0;
+    const WoodColorSampler woodSampler(tree);
+    std::vector<uint32_t> woodTriangles;
+    if (captureWood) {
+      woodTriangles.resize(tree.wood.triangleCount());
+      std::iota(woodTriangles.begin(), woodTriangles.end(), 0u);
+    }
     std::vector<ImageRgba8> images(textured.size() * 6);
     std::vector<std::array<Billboard, 6>> quads(textured.size());
     tbb::parallel_for(size_t(0), textured.size(), [&](size_t t) {
@@ -194,10 +215,12 @@ class BboxHierarchy final : public Method {
       std::vector<uint32_t> leaves(mHierarchy.leafOrder.begin() + node.leafBegin,
                                    mHierarchy.leafOrder.begin() + node.subtreeLeafEnd);
       quads[t] = boxQuads(node.box, mParams.arrangement == "diagonal");
+      const bool withWood = captureWood && textured[t] == 0;
       for (int f = 0; f < 6; ++f) {
-        images[t * 6 + f] =
-            captureLeavesOrthographic(tree, sampler, leaves, quads[t][f], mParams.textureSize,
-                                      mParams.textureSize, mParams.supersample);
+        images[t * 6 + f] = captureLeavesOrthographic(
+            tree, sampler, leaves, quads[t][f], mParams.textureSize, mParams.textureSize,
+            mParams.supersample, false, withWood ? &woodSampler : nullptr,
+            withWood ? woodTriangles : std::vector<uint32_t>{});
       }
     });
     const ImageAtlas atlas = composeAtlas(images, kAtlasPadding, kAtlasAlignment);
@@ -222,6 +245,19 @@ class BboxHierarchy final : public Method {
                      2.0f * std::max(q.halfExtents.x, q.halfExtents.y) / mParams.textureSize);
       }
     }
+    // The root box alone is drawn where the walk would choose it (the viewer beyond its LoD
+    // distance and the transition band), measured as the wood measures its levels: the tree's
+    // projected bounding radius, below radius · lod_bias / (root texel size · (1 + transition)).
+    mTreeBounds = tree.bounds;
+    mRootOnlyBelowPixels = 0.0f;
+    std::vector<CapturedWood> capturedWood;
+    if (captureWood) {
+      mRootOnlyBelowPixels =
+          treeRadius() * mParams.lodBias / (mWorldPerTexel[0] * (1.0f + mParams.transition));
+      capturedWood.push_back(
+          {std::vector<bool>(tree.wood.triangleCount(), true), mRootOnlyBelowPixels});
+    }
+    mWood.bake(tree, mParams.wood.levels(), capturedWood);
     mLeafFirstIndex = static_cast<uint32_t>(mIndices.size());
     for (uint32_t leafIndex : mHierarchy.leafOrder) {
       const Leaf& leaf = tree.leaves[leafIndex];
@@ -257,12 +293,15 @@ class BboxHierarchy final : public Method {
     for (const auto& [level, value] : perLevel)
       levels.push_back(
           {{"level", level}, {"textured_boxes", value.first}, {"texel_bytes", value.second}});
-    mReport = {{"hierarchy", mHierarchy.source},
-               {"boxes", mHierarchy.nodes.size()},
-               {"textured_boxes", textured.size()},
-               {"boxes_over_texture_budget", droppedByBudget},
-               {"levels", levels},
-               {"atlas", {atlas.layout.width, atlas.layout.height}}};
+    mReport = {
+        {"hierarchy", mHierarchy.source},
+        {"boxes", mHierarchy.nodes.size()},
+        {"textured_boxes", textured.size()},
+        {"boxes_over_texture_budget", droppedByBudget},
+        {"levels", levels},
+        {"atlas", {atlas.layout.width, atlas.layout.height}},
+        {"wood_captured",
+         {{"triangles", woodTriangles.size()}, {"root_only_below_px", mRootOnlyBelowPixels}}}};
     mTextured = textured;
   }
 
@@ -404,6 +443,8 @@ class BboxHierarchy final : public Method {
     fields.worldPerTexel = mWorldPerTexel;
     fields.leafFirstIndex = mLeafFirstIndex;
     fields.leafImages = mLeafImages.size();
+    fields.rootOnlyBelowPixels = mRootOnlyBelowPixels;
+    fields.treeBounds = mTreeBounds;
     asset.writeFields(fields);
     asset.writeBlob("vertices.bin", mVertices);
     asset.writeBlob("indices.bin", mIndices);
@@ -437,6 +478,10 @@ class BboxHierarchy final : public Method {
     mBoxFirstIndex = fields.boxFirstIndex;
     mWorldPerTexel = fields.worldPerTexel;
     mLeafFirstIndex = fields.leafFirstIndex;
+    mRootOnlyBelowPixels = fields.rootOnlyBelowPixels;
+    mTreeBounds = fields.treeBounds;
+    if (!std::isfinite(mRootOnlyBelowPixels) || mRootOnlyBelowPixels < 0.0f)
+      throwInputError("{}: corrupt box hierarchy header (root_only_below_px)", folder);
     mVertices = asset.readBlobAs<MeshVertex>("vertices.bin");
     mIndices = asset.readBlobAs<uint32_t>("indices.bin");
     mHierarchy.leafOrder = asset.readBlobAs<uint32_t>("leaf_order.bin");
@@ -502,6 +547,8 @@ class BboxHierarchy final : public Method {
 
   // Walks one instance's hierarchy (Fig. 4) from its viewer position and adds its matrix to the
   // lists of what it draws; the matrix's unused bottom row carries the entry's dissolve.
+  float treeRadius() const { return 0.5f * glm::length(mTreeBounds.extent()); }
+
   void collectInstance(const Instance& instance, const FrameContext& frame,
                        const std::vector<float>& lodDistance,
                        std::vector<std::vector<glm::mat4>>& boxLists,
@@ -509,6 +556,17 @@ class BboxHierarchy final : public Method {
     const glm::mat4 model = instance.modelMatrix();
     const glm::vec3 viewer =
         glm::vec3(glm::affineInverse(model) * glm::vec4(frame.cameraPosition, 1.0f));
+    if (mRootOnlyBelowPixels > 0.0f) {
+      // The wood follows this test (its empty residual chain), so the root's images, which hold
+      // the wood, are drawn whenever it passes, a forced level or not.
+      const glm::vec3 centre = glm::vec3(model * glm::vec4(mTreeBounds.center(), 1.0f));
+      if (frame.projectedPixels(treeRadius() * instance.scale,
+                                glm::length(frame.cameraPosition - centre)) <
+          mRootOnlyBelowPixels) {
+        boxLists[0].push_back(model);
+        return;
+      }
+    }
     walkHierarchy(mHierarchy, lodDistance, viewer, mParams.transition, frame.forcedLevel, mWalk);
     const auto withDissolve = [&](const WalkEntry& entry) {
       glm::mat4 m = model;
@@ -546,6 +604,8 @@ class BboxHierarchy final : public Method {
   uint64_t mSignature = 0;          // of the boxes the last draw showed as images (popping metric)
   uint64_t mLeafPolygonsDrawn = 0;  // leaves the last draw drew as polygons, all instances
   uint32_t mLeafFirstIndex = 0;
+  Aabb mTreeBounds;                   // the wood's and the root-only test's projected radius
+  float mRootOnlyBelowPixels = 0.0f;  // wood_capture: trees below draw the root box alone
   std::vector<MeshVertex> mVertices;
   std::vector<uint32_t> mIndices;
   ImageRgba8 mAtlas;

@@ -391,6 +391,82 @@ TEST(BboxHierarchy, TextureMemoryDoesNotGrowWithTheLeavesUnderTheBudget) {
   EXPECT_LT(double(bounded[8000]), 1.25 * double(bounded[1000]));
 }
 
+// wood_capture: the root box's images hold the wood, and a tree drawn with the root box alone
+// draws none as geometry (its wood level is the empty residual chain). Far away the captured wood
+// shows: on a tree of few leaves, whose wood is much of its coverage, the coverage against the
+// reference is closer than with the wood left out (measured 0.40 against 0.49). Nearer, where
+// finer boxes and the wood's geometry are drawn, the image is the one without capture.
+TEST(BboxHierarchy, WoodCaptureDrawsAFarTreesWoodFromTheRootImagesOnly) {
+  auto context = test::makeTestContext();
+  gl::Ledger ledger;
+  gl::Device device(ledger);
+  const Tree tree = test::smallTree(100, 5);
+  ASSERT_GT(tree.wood.triangleCount(), 0u);
+  RenderSettings settings;
+  settings.width = settings.height = 256;
+  Harness harness(device, settings);
+  const float focal =
+      0.5f * float(settings.height) / std::tan(glm::radians(0.5f * settings.fovYDegrees));
+  const float radius = 0.5f * glm::length(tree.bounds.extent());
+  const auto cameraAt = [&](float projectedRadius) {
+    Camera camera;
+    camera.fovYDegrees = settings.fovYDegrees;
+    camera.target = tree.bounds.center();
+    const float distance = radius * focal / projectedRadius;
+    camera.position = camera.target + glm::normalize(glm::vec3(0.6f, 0.3f, 0.74f)) * distance;
+    camera.farPlane = distance + 2.0f * radius;
+    return camera;
+  };
+  const nlohmann::json base = {{"texture_size", 64}};
+  auto captured = test::bakeAndUpload(device, tree, "bbox_hierarchy", base);
+  nlohmann::json off = base;
+  off["wood_capture"] = false;
+  auto geometry = test::bakeAndUpload(device, tree, "bbox_hierarchy", off);
+  nlohmann::json none = base;
+  none["wood"] = false;
+  auto woodless = test::bakeAndUpload(device, tree, "bbox_hierarchy", none);
+  auto reference = test::bakeAndUpload(device, tree, "polygonal", {});
+  const float below = captured->bakeReport()["wood_captured"]["root_only_below_px"].get<float>();
+  EXPECT_EQ(captured->bakeReport()["wood_captured"]["triangles"].get<size_t>(),
+            tree.wood.triangleCount());
+  EXPECT_EQ(geometry->bakeReport()["wood_captured"]["triangles"].get<size_t>(), 0u);
+  EXPECT_EQ(geometry->effectiveParams()["wood_capture"], false);
+  EXPECT_EQ(woodless->effectiveParams()["wood_capture"], false);  // no wood to capture
+  ASSERT_GT(below, 4.0f);
+
+  // Far: the triangles of the wood level drawn, with and without capture.
+  const auto woodTrianglesDrawn = [&](Method& method) {
+    const nlohmann::json levels = method.bakeReport()["wood_levels"];
+    const std::vector<uint64_t> instances = method.woodInstancesPerLevel();
+    uint64_t triangles = 0;
+    for (size_t l = 0; l < instances.size(); ++l)
+      triangles += instances[l] * levels[l]["triangles"].get<uint64_t>();
+    return triangles;
+  };
+  const Camera far = cameraAt(0.8f * below);
+  const ImageRgba8 referenceFar = harness.render(*reference, far);
+  const ImageMetrics withCapture = compareImages(referenceFar, harness.render(*captured, far));
+  EXPECT_EQ(woodTrianglesDrawn(*captured), 0u);
+  harness.render(*geometry, far);
+  EXPECT_GT(woodTrianglesDrawn(*geometry), 0u);
+  const ImageMetrics withoutWood = compareImages(referenceFar, harness.render(*woodless, far));
+  std::printf(
+      "far tree (%.1f px radius, root only below %.1f): coverage error %.4f with the wood "
+      "in the images, %.4f with no wood\n",
+      0.8f * below, below, withCapture.coverageError, withoutWood.coverageError);
+  EXPECT_LT(withCapture.coverageError, withoutWood.coverageError);
+
+  // Near: finer boxes and the wood as geometry, the same image either way but for the atlas'
+  // mip levels, whose alpha scale is one per level over all boxes (the root's images changed).
+  const Camera near = cameraAt(3.0f * below);
+  const ImageMetrics nearMetrics =
+      compareImages(harness.render(*geometry, near), harness.render(*captured, near));
+  EXPECT_GT(woodTrianglesDrawn(*captured), 0u);
+  std::printf("near tree: PSNR %.2f dB, coverage error %.5f between capture and none\n",
+              nearMetrics.psnr, nearMetrics.coverageError);
+  EXPECT_GT(nearMetrics.psnr, 40.0);
+}
+
 TEST(BboxHierarchy, BadParametersNameTheParameter) {
   test::expectParameterErrorsNameTheKey("bbox_hierarchy", {{"texture_size", 0},
                                                            {"volume_ratio", 2.0},
@@ -401,7 +477,8 @@ TEST(BboxHierarchy, BadParametersNameTheParameter) {
                                                            {"texture_budget_mb", -1.0},
                                                            {"quad_blend", "sorted"},
                                                            {"facing_power", 0.0},
-                                                           {"lod_bias", 0.0}});
+                                                           {"lod_bias", 0.0},
+                                                           {"wood_capture", 2}});
 }
 
 }  // namespace
