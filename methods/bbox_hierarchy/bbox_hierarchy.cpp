@@ -38,7 +38,7 @@ struct BboxParams {
   float facingPower = 1.0f;
   float lodBias = 1.0f;
   WoodParams wood;
-  bool woodCapture = true;
+  bool woodCapture = false;
 
   template <class Visitor>
   void visit(Visitor& v) {
@@ -76,8 +76,9 @@ struct BboxParams {
     wood.visit(v);
     v("wood_capture", woodCapture,
       "beyond the paper: the root box's images also hold the wood (opaque, its albedo), and a "
-      "tree drawn with the root box alone draws no wood geometry (false: every tree draws its "
-      "wood; false in effect without wood)");
+      "tree drawn with the root box alone draws no wood geometry: faster forests, but the "
+      "crossed planes double the flattened branches (false: every tree draws its wood, as the "
+      "paper; false in effect without wood)");
   }
 };
 

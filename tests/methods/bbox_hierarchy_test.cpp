@@ -417,13 +417,13 @@ TEST(BboxHierarchy, WoodCaptureDrawsAFarTreesWoodFromTheRootImagesOnly) {
     camera.farPlane = distance + 2.0f * radius;
     return camera;
   };
-  const nlohmann::json base = {{"texture_size", 64}};
+  const nlohmann::json base = {{"texture_size", 64}, {"wood_capture", true}};
   auto captured = test::bakeAndUpload(device, tree, "bbox_hierarchy", base);
   nlohmann::json off = base;
   off["wood_capture"] = false;
   auto geometry = test::bakeAndUpload(device, tree, "bbox_hierarchy", off);
   nlohmann::json none = base;
-  none["wood"] = false;
+  none["wood"] = false;  // wood_capture is then false in effect
   auto woodless = test::bakeAndUpload(device, tree, "bbox_hierarchy", none);
   auto reference = test::bakeAndUpload(device, tree, "polygonal", {});
   const float below = captured->bakeReport()["wood_captured"]["root_only_below_px"].get<float>();
