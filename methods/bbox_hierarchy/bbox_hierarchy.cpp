@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <optional>
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_inverse.hpp>
@@ -203,9 +204,10 @@ class BboxHierarchy final : public Method {
     // alone then draw an empty residual chain of the wood.
     const bool captureWood = mParams.woodCapture && tree.wood.triangleCount() > 0 &&
                              !textured.empty() && textured.front() == 0;
-    const WoodColorSampler woodSampler(tree);
+    std::optional<WoodColorSampler> woodSampler;
     std::vector<uint32_t> woodTriangles;
     if (captureWood) {
+      woodSampler.emplace(tree);
       woodTriangles.resize(tree.wood.triangleCount());
       std::iota(woodTriangles.begin(), woodTriangles.end(), 0u);
     }
@@ -220,7 +222,7 @@ class BboxHierarchy final : public Method {
       for (int f = 0; f < 6; ++f) {
         images[t * 6 + f] = captureLeavesOrthographic(
             tree, sampler, leaves, quads[t][f], mParams.textureSize, mParams.textureSize,
-            mParams.supersample, false, withWood ? &woodSampler : nullptr,
+            mParams.supersample, false, withWood ? &*woodSampler : nullptr,
             withWood ? woodTriangles : std::vector<uint32_t>{});
       }
     });
@@ -546,10 +548,11 @@ class BboxHierarchy final : public Method {
     if (!valid) throwInputError("{}: corrupt box hierarchy header", folder);
   }
 
-  // Walks one instance's hierarchy (Fig. 4) from its viewer position and adds its matrix to the
-  // lists of what it draws; the matrix's unused bottom row carries the entry's dissolve.
+  // The tree's bounding radius, as the wood's levels and the root-only test measure it.
   float treeRadius() const { return 0.5f * glm::length(mTreeBounds.extent()); }
 
+  // Walks one instance's hierarchy (Fig. 4) from its viewer position and adds its matrix to the
+  // lists of what it draws; the matrix's unused bottom row carries the entry's dissolve.
   void collectInstance(const Instance& instance, const FrameContext& frame,
                        const std::vector<float>& lodDistance,
                        std::vector<std::vector<glm::mat4>>& boxLists,
