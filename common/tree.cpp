@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <tuple>
 
 #include <glm/geometric.hpp>
 
@@ -46,6 +47,40 @@ glm::vec2 Leaf::cornerUv(int i) const {
   static constexpr int kPickU[4] = {0, 1, 1, 0};
   static constexpr int kPickV[4] = {0, 0, 1, 1};
   return {kPickU[i] ? uvMax.x : uvMin.x, kPickV[i] ? uvMax.y : uvMin.y};
+}
+
+std::vector<uint32_t> WoodMesh::vertexParts() const {
+  // Union-find over vertices with path halving: triangles' corners, then equal positions.
+  std::vector<uint32_t> parent(positions.size());
+  std::iota(parent.begin(), parent.end(), 0u);
+  const auto find = [&](uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  const auto join = [&](uint32_t a, uint32_t b) {
+    a = find(a), b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  };
+  for (size_t t = 0; t + 2 < indices.size(); t += 3) {
+    join(indices[t], indices[t + 1]);
+    join(indices[t], indices[t + 2]);
+  }
+  std::vector<uint32_t> order(positions.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    const glm::vec3 &p = positions[a], &q = positions[b];
+    return std::tie(p.x, p.y, p.z, a) < std::tie(q.x, q.y, q.z, b);
+  });
+  for (size_t i = 1; i < order.size(); ++i)
+    if (positions[order[i]] == positions[order[i - 1]]) join(order[i], order[i - 1]);
+  std::vector<uint32_t> part(positions.size()), number(positions.size(), UINT32_MAX);
+  uint32_t parts = 0;
+  for (uint32_t v = 0; v < positions.size(); ++v) {
+    const uint32_t root = find(v);
+    if (number[root] == UINT32_MAX) number[root] = parts++;
+    part[v] = number[root];
+  }
+  return part;
 }
 
 float Tree::boundingSphereRadius() const {

@@ -44,6 +44,11 @@ struct WoodMesh {
   bool solid = false;
 
   size_t triangleCount() const { return indices.size() / 3; }
+  // The connected parts (a branch segment's tube for the built-in trees): one part number per
+  // vertex, vertices of one triangle or at one position in one part (files split vertices along
+  // seams, so positions, not indices, say what touches), numbered in the order of each part's
+  // first vertex.
+  std::vector<uint32_t> vertexParts() const;
 };
 
 struct WoodMaterial {

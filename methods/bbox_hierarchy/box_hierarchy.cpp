@@ -139,43 +139,10 @@ BoxHierarchy woodHierarchy(const Tree& tree) {
   BoxHierarchy hierarchy;
   hierarchy.source = "wood";
   if (wood.positions.empty()) return hierarchy;
-  // Connected parts: union-find over triangles and over vertices at the same position.
-  std::vector<uint32_t> parent(wood.positions.size());
-  std::iota(parent.begin(), parent.end(), 0u);
-  const auto find = [&](uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  const auto join = [&](uint32_t a, uint32_t b) {
-    a = find(a), b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  };
-  for (size_t t = 0; t < wood.indices.size(); t += 3) {
-    join(wood.indices[t], wood.indices[t + 1]);
-    join(wood.indices[t], wood.indices[t + 2]);
-  }
-  {
-    std::vector<uint32_t> order(wood.positions.size());
-    std::iota(order.begin(), order.end(), 0u);
-    const auto less = [&](uint32_t a, uint32_t b) {
-      const glm::vec3 &p = wood.positions[a], &q = wood.positions[b];
-      return std::tie(p.x, p.y, p.z, a) < std::tie(q.x, q.y, q.z, b);
-    };
-    std::sort(order.begin(), order.end(), less);
-    for (size_t i = 1; i < order.size(); ++i) {
-      if (wood.positions[order[i]] == wood.positions[order[i - 1]]) join(order[i], order[i - 1]);
-    }
-  }
-  // Parts in order of their lowest point (ties by first vertex): the trunk first.
-  std::vector<uint32_t> partOf(wood.positions.size());
-  std::vector<uint32_t> roots;
-  std::vector<int32_t> partIndex(wood.positions.size(), -1);
-  for (uint32_t v = 0; v < wood.positions.size(); ++v) {
-    const uint32_t r = find(v);
-    if (partIndex[r] < 0) partIndex[r] = static_cast<int32_t>(roots.size()), roots.push_back(r);
-    partOf[v] = static_cast<uint32_t>(partIndex[r]);
-  }
-  const size_t parts = roots.size();
+  // Connected parts, numbered by their first vertex; then in order of their lowest point (ties by
+  // that number): the trunk first.
+  const std::vector<uint32_t> partOf = wood.vertexParts();
+  const size_t parts = size_t(*std::max_element(partOf.begin(), partOf.end())) + 1;
   if (parts < 2) return hierarchy;
   std::vector<uint32_t> lowest(parts, UINT32_MAX);
   std::vector<Aabb> partBox(parts);

@@ -4,8 +4,6 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <map>
-#include <numeric>
 #include <optional>
 
 #include <glm/geometric.hpp>
@@ -30,35 +28,17 @@ std::optional<float> planeDistanceInside(const Billboard& billboard, const Corne
   return distance;
 }
 
-// Union-find over triangles with path halving.
-uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t i) {
-  while (parent[i] != i) i = parent[i] = parent[parent[i]];
-  return i;
-}
-
 }  // namespace
 
 std::vector<uint32_t> woodParts(const WoodMesh& wood) {
-  const auto triangles = static_cast<uint32_t>(wood.triangleCount());
-  std::vector<uint32_t> parent(triangles);
-  std::iota(parent.begin(), parent.end(), 0u);
-  // The first triangle seen at each position: files split vertices along seams, so positions,
-  // not indices, say which triangles touch.
-  std::map<std::array<float, 3>, uint32_t> firstAt;
-  for (uint32_t t = 0; t < triangles; ++t) {
-    for (int k = 0; k < 3; ++k) {
-      const glm::vec3& p = wood.positions[wood.indices[t * 3 + k]];
-      const auto [it, inserted] = firstAt.try_emplace({p.x, p.y, p.z}, t);
-      if (!inserted) parent[findRoot(parent, t)] = findRoot(parent, it->second);
-    }
-  }
-  // Parts numbered in the order of their first triangle, so the numbering is deterministic.
-  std::vector<uint32_t> part(triangles), number(triangles, triangles);
+  const std::vector<uint32_t> ofVertex = wood.vertexParts();
+  // Renumbered in the order of the parts' first triangles, as the header promises.
+  std::vector<uint32_t> part(wood.triangleCount()), number(ofVertex.size(), UINT32_MAX);
   uint32_t parts = 0;
-  for (uint32_t t = 0; t < triangles; ++t) {
-    const uint32_t root = findRoot(parent, t);
-    if (number[root] == triangles) number[root] = parts++;
-    part[t] = number[root];
+  for (size_t t = 0; t < part.size(); ++t) {
+    uint32_t& n = number[ofVertex[wood.indices[t * 3]]];
+    if (n == UINT32_MAX) n = parts++;
+    part[t] = n;
   }
   return part;
 }

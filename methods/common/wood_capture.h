@@ -21,9 +21,8 @@ std::vector<std::vector<uint32_t>> assignWoodToBillboards(const WoodMesh& wood,
                                                           const std::vector<Billboard>& billboards,
                                                           float maxDistance);
 
-// The connected parts of the wood (a branch segment's tube for the built-in trees): triangles
-// that share a corner position are in one part. One part number per triangle, numbered in the
-// order of the parts' first triangles.
+// The connected parts of the wood (WoodMesh::vertexParts) per triangle: triangles that share a
+// corner position are in one part, numbered in the order of the parts' first triangles.
 std::vector<uint32_t> woodParts(const WoodMesh& wood);
 
 // As assignWoodToBillboards, a part at a time: a part goes whole to the billboard nearest it
