@@ -30,7 +30,7 @@ struct BboxParams {
   std::string arrangement = "cross";
   float transition = 0.25f;
   std::string hierarchy = "auto";
-  int minBoxLeaves = 16;
+  int minBoxLeaves = 64;
   int spatialLeaves = 200;
   int supersample = 4;
   std::string compression = "none";
@@ -54,7 +54,8 @@ struct BboxParams {
     v("hierarchy", hierarchy, {"auto", "branches", "wood", "spatial"},
       "boxes from the L-system's branches, the wood mesh, or a spatial split of the leaves");
     v("min_box_leaves", minBoxLeaves, 1, 1000000,
-      "no images for boxes holding fewer leaves (drawn as polygons)");
+      "no images for boxes holding fewer leaves (drawn as polygons: few leaves cost no more "
+      "than a box's three image quads and look like the reference)");
     v("spatial_leaves", spatialLeaves, 1, 1000000,
       "spatial hierarchy: at most this many leaves per finest box");
     v("supersample", supersample, 1, 8, "capture samples per texel side");
