@@ -319,6 +319,13 @@ GLenum stageOf(std::string_view path) {
 
 }  // namespace
 
+std::string withDefines(const ShaderSource& source, std::string_view defines) {
+  std::string text(source.text);
+  const size_t newline = text.find('\n');
+  text.insert(newline == std::string::npos ? text.size() : newline + 1, defines);
+  return text;
+}
+
 namespace {
 bool gLitVariant = false;
 constexpr std::string_view kLightingInclude = "methods/common/lighting.glsl";

@@ -330,14 +330,12 @@ class MultilayerIndirect final : public Method {
     }
     const gl::ShaderSource& fragment =
         gl::embeddedShader("methods/multilayer_indirect/multilayer_indirect.frag");
-    mFragmentText = std::string(fragment.text);
-    mFragmentText.insert(mFragmentText.find('\n') + 1,
-                         fmt::format("#define RECORDS_8BIT {}\n#define PARALLAX {}\n",
-                                     packed() ? 1 : 0, mParams.parallax ? 1 : 0));
+    mFragmentText =
+        gl::withDefines(fragment, fmt::format("#define RECORDS_8BIT {}\n#define PARALLAX {}\n",
+                                              packed() ? 1 : 0, mParams.parallax ? 1 : 0));
     const gl::ShaderSource& vertex =
         gl::embeddedShader("methods/multilayer_indirect/multilayer_indirect.vert");
-    mFarVertexText = std::string(vertex.text);
-    mFarVertexText.insert(mFarVertexText.find('\n') + 1, "#define FAR_LEVEL 1\n");
+    mFarVertexText = gl::withDefines(vertex, "#define FAR_LEVEL 1\n");
     mProgram = device.createProgram({vertex, {fragment.path, mFragmentText}});
     mFarProgram =
         device.createProgram({{vertex.path, mFarVertexText},

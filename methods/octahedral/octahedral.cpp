@@ -260,10 +260,9 @@ class OctahedralMethod final : public Method {
   void buildProgram(gl::Device& device, int frames, FrameProgram& out) const {
     const gl::ShaderSource& fragment = gl::embeddedShader("methods/octahedral/octahedral.frag");
     out.frames = frames;
-    out.fragmentText = std::string(fragment.text);
-    out.fragmentText.insert(out.fragmentText.find('\n') + 1,
-                            fmt::format("#define BLEND_FRAMES {}\n#define PARALLAX_STEPS {}\n",
-                                        frames, mParams.parallaxSteps));
+    out.fragmentText = gl::withDefines(
+        fragment, fmt::format("#define BLEND_FRAMES {}\n#define PARALLAX_STEPS {}\n", frames,
+                              mParams.parallaxSteps));
     out.program = device.createProgram({gl::embeddedShader("methods/octahedral/octahedral.vert"),
                                         {fragment.path, out.fragmentText}});
   }

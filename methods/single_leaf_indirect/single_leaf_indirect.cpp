@@ -262,8 +262,7 @@ class SingleLeafIndirect final : public Method {
         {vertex, gl::embeddedShader("methods/single_leaf_indirect/single_leaf_indirect.frag")});
     if (!mLowRes.empty()) {
       mLowResTexture = uploadAlphaTestedArray(device, mLowRes, true, "low-resolution atlas");
-      mTextureVertexText = std::string(vertex.text);
-      mTextureVertexText.insert(mTextureVertexText.find('\n') + 1, "#define LOWRES_TEXTURE 1\n");
+      mTextureVertexText = gl::withDefines(vertex, "#define LOWRES_TEXTURE 1\n");
       mTextureProgram =
           device.createProgram({{vertex.path, mTextureVertexText},
                                 gl::embeddedShader("methods/common/alpha_tested_texture.frag")});
