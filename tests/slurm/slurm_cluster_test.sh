@@ -131,7 +131,7 @@ grep -q "^#SBATCH --array=0-2$" "$work/run1/canopy-array.sbatch" || fail "no 3-t
 state=$(wait_job "$merge" 300)
 [[ "$state" == COMPLETED ]] || fail "merge job $merge ended $state"
 [[ "$(wait_job "$array" 10)" == COMPLETED ]] || fail "array job $array did not complete"
-python3 "$here/compare_records.py" "$work/single" "$work/run1" ||
+python3 "$here/../../tools/compare_records.py" "$work/single" "$work/run1" ||
   fail "the merged records differ from the single run's"
 
 # Pass 2: task 1 cancelled before it runs (each task takes every CPU, so they run one by one).
@@ -154,6 +154,6 @@ merge=$(sbatch --parsable --dependency="afterok:${rerun%%;*}" --kill-on-invalid-
   "$work/run2/canopy-merge.sbatch") || fail "second merge not submitted"
 state=$(wait_job "${merge%%;*}" 300)
 [[ "$state" == COMPLETED ]] || fail "merge job after the rerun ended $state"
-python3 "$here/compare_records.py" "$work/single" "$work/run2" ||
+python3 "$here/../../tools/compare_records.py" "$work/single" "$work/run2" ||
   fail "after the rerun, the merged records differ from the single run's"
 echo "PASSED: 3-shard array merged equal to the single run, before and after a cancelled task"
