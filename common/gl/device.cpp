@@ -319,11 +319,11 @@ GLenum stageOf(std::string_view path) {
 
 }  // namespace
 
-std::string withDefines(const ShaderSource& source, std::string_view defines) {
-  std::string text(source.text);
-  const size_t newline = text.find('\n');
-  text.insert(newline == std::string::npos ? text.size() : newline + 1, defines);
-  return text;
+std::string withDefines(std::string_view text, std::string_view defines) {
+  std::string out(text);
+  const size_t newline = out.find('\n');
+  out.insert(newline == std::string::npos ? out.size() : newline + 1, defines);
+  return out;
 }
 
 namespace {
@@ -344,10 +344,7 @@ GlName<deleteProgramName> buildProgram(const std::vector<ShaderSource>& stages,
     std::string expanded = expandIncludes(stage, sourcePaths);
     for (std::string_view path : sourcePaths)
       if (path == kLightingInclude && usesLighting) *usesLighting = true;
-    if (!define.empty()) {
-      const size_t afterVersion = expanded.find('\n') + 1;
-      expanded.insert(afterVersion, define + "\n#line 2 0\n");
-    }
+    if (!define.empty()) expanded = withDefines(expanded, define + "\n#line 2 0\n");
     const GLchar* text = expanded.data();
     const auto length = static_cast<GLint>(expanded.size());
     g.ShaderSource(shader, 1, &text, &length);

@@ -128,9 +128,9 @@ struct ShaderSource {
 // Looks up a shader embedded at build time by its repository path; throws std::logic_error
 // when no such file was embedded (a build mistake, not user input).
 const ShaderSource& embeddedShader(std::string_view path);
-// `source`'s text with `defines` (whole lines, e.g. "#define X 1\n") after its #version line: a
+// A shader's `text` with `defines` (whole lines, e.g. "#define X 1\n") after its #version line: a
 // variant of one shader file. The caller keeps the string while a ShaderSource views it.
-std::string withDefines(const ShaderSource& source, std::string_view defines);
+std::string withDefines(std::string_view text, std::string_view defines);
 
 // Programs whose shaders include methods/common/lighting.glsl are built twice: unlit, and with
 // CANOPY_LIT defined (lighting, AO, leaf normals, shadow lookups). On a CPU rasteriser code

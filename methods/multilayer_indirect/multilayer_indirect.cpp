@@ -331,11 +331,11 @@ class MultilayerIndirect final : public Method {
     const gl::ShaderSource& fragment =
         gl::embeddedShader("methods/multilayer_indirect/multilayer_indirect.frag");
     mFragmentText =
-        gl::withDefines(fragment, fmt::format("#define RECORDS_8BIT {}\n#define PARALLAX {}\n",
-                                              packed() ? 1 : 0, mParams.parallax ? 1 : 0));
+        gl::withDefines(fragment.text, fmt::format("#define RECORDS_8BIT {}\n#define PARALLAX {}\n",
+                                                   packed() ? 1 : 0, mParams.parallax ? 1 : 0));
     const gl::ShaderSource& vertex =
         gl::embeddedShader("methods/multilayer_indirect/multilayer_indirect.vert");
-    mFarVertexText = gl::withDefines(vertex, "#define FAR_LEVEL 1\n");
+    mFarVertexText = gl::withDefines(vertex.text, "#define FAR_LEVEL 1\n");
     mProgram = device.createProgram({vertex, {fragment.path, mFragmentText}});
     mFarProgram =
         device.createProgram({{vertex.path, mFarVertexText},

@@ -261,8 +261,8 @@ class OctahedralMethod final : public Method {
     const gl::ShaderSource& fragment = gl::embeddedShader("methods/octahedral/octahedral.frag");
     out.frames = frames;
     out.fragmentText = gl::withDefines(
-        fragment, fmt::format("#define BLEND_FRAMES {}\n#define PARALLAX_STEPS {}\n", frames,
-                              mParams.parallaxSteps));
+        fragment.text, fmt::format("#define BLEND_FRAMES {}\n#define PARALLAX_STEPS {}\n", frames,
+                                   mParams.parallaxSteps));
     out.program = device.createProgram({gl::embeddedShader("methods/octahedral/octahedral.vert"),
                                         {fragment.path, out.fragmentText}});
   }

@@ -262,7 +262,7 @@ class SingleLeafIndirect final : public Method {
         {vertex, gl::embeddedShader("methods/single_leaf_indirect/single_leaf_indirect.frag")});
     if (!mLowRes.empty()) {
       mLowResTexture = uploadAlphaTestedArray(device, mLowRes, true, "low-resolution atlas");
-      mTextureVertexText = gl::withDefines(vertex, "#define LOWRES_TEXTURE 1\n");
+      mTextureVertexText = gl::withDefines(vertex.text, "#define LOWRES_TEXTURE 1\n");
       mTextureProgram =
           device.createProgram({{vertex.path, mTextureVertexText},
                                 gl::embeddedShader("methods/common/alpha_tested_texture.frag")});
