@@ -344,7 +344,7 @@ GlName<deleteProgramName> buildProgram(const std::vector<ShaderSource>& stages,
     std::string expanded = expandIncludes(stage, sourcePaths);
     for (std::string_view path : sourcePaths)
       if (path == kLightingInclude && usesLighting) *usesLighting = true;
-    if (!define.empty()) expanded = withDefines(expanded, define + "\n#line 2 0\n");
+    if (!define.empty()) expanded = withDefines(expanded, fmt::format("{}\n#line 2 0\n", define));
     const GLchar* text = expanded.data();
     const auto length = static_cast<GLint>(expanded.size());
     g.ShaderSource(shader, 1, &text, &length);
